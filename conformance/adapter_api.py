@@ -1,0 +1,21 @@
+"""What a library adapter raises: the contract between the runner and an implementation under test.
+
+A library adapter is any object with ``hello() -> dict``, ``encode(suite, message, byte_order) -> bytes``
+and ``decode(suite, frame) -> dict`` (messages in the corpus's decoded form). It refuses an input by
+raising ``Rejected``; it declares a capability absent by raising ``Unsupported``. Any other exception
+is an adapter error, never a pass.
+"""
+
+from __future__ import annotations
+
+
+class Rejected(Exception):
+    """The implementation refused the input; ``rule`` names the corpus rule it reported, if it knows."""
+
+    def __init__(self, reason: str, rule: str | None = None):
+        super().__init__(reason)
+        self.reason, self.rule = reason, rule
+
+
+class Unsupported(Exception):
+    """The implementation lacks this capability (an operation, a byte order, a message)."""

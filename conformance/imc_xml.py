@@ -1,0 +1,51 @@
+"""The real IMC.xml that imcpy 1.1.2 was built from, fetched from the imcpy sdist on PyPI and cached.
+
+Never committed: ``pip download`` brings the sdist, the XML is extracted into the cache directory
+(``$IMC_CONFORMANCE_CACHE``, else ``~/.cache/imc-conformance``).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tarfile
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+IMCPY_VERSION = "1.1.2"
+_MEMBER = f"imcpy-{IMCPY_VERSION}/imc/IMC.xml"
+
+
+def cache_dir() -> Path:
+    root = os.environ.get("IMC_CONFORMANCE_CACHE") or Path.home() / ".cache" / "imc-conformance"
+    path = Path(root)
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def fetch_imc_xml(timeout: float = 300) -> Path:
+    """Path of the cached IMC.xml, downloading the imcpy sdist once if needed."""
+    target = cache_dir() / f"IMC-imcpy-{IMCPY_VERSION}.xml"
+    if target.exists():
+        return target
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-m", "pip", "download", "--no-deps", "--no-binary", ":all:",
+               "--no-build-isolation", "--disable-pip-version-check", "-d", tmp, f"imcpy=={IMCPY_VERSION}"]
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        if done.returncode != 0:
+            raise RuntimeError(f"could not download the imcpy {IMCPY_VERSION} sdist: {done.stderr.strip()[-500:]}")
+        sdist = next(Path(tmp).glob("imcpy-*.tar.gz"))
+        with tarfile.open(sdist) as tar:
+            member = tar.extractfile(_MEMBER)
+            if member is None:
+                raise RuntimeError(f"{sdist.name} has no {_MEMBER}")
+            partial = target.with_suffix(".part")
+            partial.write_bytes(member.read())
+            partial.replace(target)
+    return target
+
+
+def parse_imc_xml(path: Path) -> ET.Element:
+    return ET.parse(path).getroot()
