@@ -17,7 +17,9 @@ from .values import float_from_bits, float_to_bits, raw_bytes, text_bytes, text_
 HEADER_SIZE = 20
 FOOTER_SIZE = 2
 ORDERS = {"le": "<", "be": ">"}
-HEADER_FIELDS = (("timestamp", "d"), ("src", "H"), ("src_ent", "B"), ("dst", "H"), ("dst_ent", "B"))
+HEADER_LAYOUT = ((0, 2, "sync", "uint16_t"), (2, 2, "mgid", "uint16_t"), (4, 2, "size", "uint16_t"),
+                 (6, 8, "timestamp", "fp64_t"), (14, 2, "src", "uint16_t"), (16, 1, "src_ent", "uint8_t"),
+                 (17, 2, "dst", "uint16_t"), (19, 1, "dst_ent", "uint8_t"))
 
 
 class FrameError(ValueError):
@@ -38,12 +40,17 @@ class EncodeError(ValueError):
 
 @dataclass(frozen=True)
 class Span:
-    """Bytes ``[start, end)`` of a frame hold ``path`` (e.g. ``LblRange.range``), of wire type ``type``."""
+    """Bytes ``[start, end)`` of a frame hold ``path`` (e.g. ``LblRange.range``), of wire type ``type``.
+
+    ``role`` tells a value from the prefixes the wire adds: ``length`` (plaintext/rawdata), ``count``
+    (message-list), ``id`` (inline message or list element id), or ``header`` / ``footer``.
+    """
 
     start: int
     end: int
     path: str
     type: str
+    role: str = "value"
 
 
 def byte_order_of(frame: bytes) -> str | None:
@@ -155,11 +162,8 @@ def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None) -> 
         raise FrameError("unknown-id", 2, f"message id {mgid} is not defined")
     ts_bits, src, src_ent, dst, dst_ent = struct.unpack_from(e + "QHBHB", frame, 6)
     if spans is not None:
-        spans += [Span(0, 2, "header.sync", "uint16_t"), Span(2, 4, "header.mgid", "uint16_t"),
-                  Span(4, 6, "header.size", "uint16_t"), Span(6, 14, "header.timestamp", "fp64_t"),
-                  Span(14, 16, "header.src", "uint16_t"), Span(16, 17, "header.src_ent", "uint8_t"),
-                  Span(17, 19, "header.dst", "uint16_t"), Span(19, 20, "header.dst_ent", "uint8_t"),
-                  Span(end, end + 2, "footer.crc", "uint16_t")]
+        spans += [Span(start, start + size_, f"header.{name}", type_, "header") for start, size_, name, type_ in HEADER_LAYOUT]
+        spans.append(Span(end, end + 2, "footer.crc", "uint16_t", "footer"))
     reader = _Reader(defs, frame, e, end, spans)
     fields = reader.fields(mdef, HEADER_SIZE, mdef.abbrev)
     header = {"timestamp": float_from_bits(ts_bits, 8), "src": src, "src_ent": src_ent, "dst": dst, "dst_ent": dst_ent}
@@ -185,13 +189,13 @@ class _Reader:
         self.pos += count
         return start
 
-    def _mark(self, start: int, path: str, type_: str) -> None:
+    def _mark(self, start: int, path: str, type_: str, role: str = "value") -> None:
         if self.spans is not None:
-            self.spans.append(Span(start, self.pos, path, type_))
+            self.spans.append(Span(start, self.pos, path, type_, role))
 
-    def _u16(self, rule: str, what: str, path: str) -> int:
+    def _u16(self, rule: str, what: str, path: str, role: str) -> int:
         start = self._take(2, rule, what)
-        self._mark(start, path, "uint16_t")
+        self._mark(start, path, "uint16_t", role)
         return struct.unpack_from(self.e + "H", self.frame, start)[0]
 
     def fields(self, mdef: MessageDef, _start: int, path: str) -> dict:
@@ -206,19 +210,19 @@ class _Reader:
                 return float_from_bits(bits, f.size)
             return struct.unpack_from(self.e + SCALAR_FORMATS[f.type], self.frame, start)[0]
         if f.type in ("plaintext", "rawdata"):
-            length = self._u16("field-overrun", f"{path} length", path + ".length")
+            length = self._u16("field-overrun", f"{path} length", path + ".length", "length")
             start = self._take(length, "length-overrun", f"{path} ({length} bytes)")
             self._mark(start, path, f.type)
             data = self.frame[start:self.pos]
             return text_value(data) if f.type == "plaintext" else data.hex()
         if f.type == "message":
             return self.inline(path, "field-overrun")
-        count = self._u16("field-overrun", f"{path} count", path + ".count")
+        count = self._u16("field-overrun", f"{path} count", path + ".count", "count")
         return [self.inline(f"{path}[{i}]", "list-count-overrun") for i in range(count)]
 
     def inline(self, path: str, rule: str):
         id_start = self.pos
-        mgid = self._u16(rule, f"{path} message id", path + ".id")
+        mgid = self._u16(rule, f"{path} message id", path + ".id", "id")
         if mgid == self.defs.null_id:
             return None
         inner = self.defs.by_id.get(mgid)

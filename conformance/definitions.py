@@ -21,7 +21,7 @@ PREFIXED = ("plaintext", "rawdata", "message", "message-list")
 class EnumValue:
     value: int
     abbrev: str
-    name: str
+    name: str | None  # absent where the source gives only the abbreviation
     editions: tuple[str, ...] | None  # None: every edition
     source: str
 
@@ -41,6 +41,7 @@ class FieldDef:
     enum_kind: str | None = None  # "enum" | "bitfield"
     enum_values: tuple[EnumValue, ...] = ()
     message_types: tuple[str, ...] = ()
+    range_source: str | None = None  # clause of min/max when it differs from the field's
 
     @property
     def is_scalar(self) -> bool:
@@ -127,7 +128,7 @@ class Definitions:
 def _field(raw: dict) -> FieldDef:
     enum = raw.get("enum") or {}
     values = tuple(
-        EnumValue(v["value"], v["abbrev"], v["name"], tuple(v["editions"]) if "editions" in v else None,
+        EnumValue(v["value"], v["abbrev"], v.get("name"), tuple(v["editions"]) if "editions" in v else None,
                   v.get("source", enum.get("source", raw["clause"])))
         for v in enum.get("values", ())
     )
@@ -135,6 +136,7 @@ def _field(raw: dict) -> FieldDef:
         abbrev=raw["abbrev"], name=raw["name"], type=raw["type"], clause=raw["clause"], unit=raw.get("unit"),
         minimum=raw.get("min"), maximum=raw.get("max"), enum_kind=enum.get("kind"), enum_values=values,
         message_types=tuple((raw.get("message_type") or {}).get("values", ())),
+        range_source=raw.get("range_source", raw["clause"]),
     )
 
 

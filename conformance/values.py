@@ -22,8 +22,11 @@ def shortest_float(x: float, width: int) -> float:
         return x
     for digits in range(1, 10):
         candidate = float(f"{x:.{digits}g}")
-        if struct.unpack("<f", struct.pack("<f", candidate))[0] == x:
-            return candidate
+        try:
+            if struct.unpack("<f", struct.pack("<f", candidate))[0] == x:
+                return candidate
+        except OverflowError:  # the rounded decimal lies beyond FLT_MAX
+            continue
     raise AssertionError(f"no round-trip decimal for {x!r}")  # unreachable: 9 digits always suffice
 
 

@@ -1,0 +1,1 @@
+"""Builds the golden corpus under ``vectors/imc/cases`` from the definitions, deterministically."""

@@ -1,0 +1,142 @@
+"""Acceptable vectors: implementation-defined behaviour, recorded rather than failed.
+
+Each record lists the outcomes an implementation may choose (``accept`` with the given message or
+frames, ``reject``, or for an out-of-type enum value ``truncate`` / ``saturate``) and the
+``reference`` outcome that DUNE and imcpy show (imc-wire.md, "What real receivers do").
+"""
+
+from __future__ import annotations
+
+import struct
+
+from .. import codec
+from ..definitions import FieldDef
+from . import samples
+from .records import MessageCases
+from .surgery import payload_of, reframe
+from .valid import F32_MAX
+
+RECEIVERS = "imc-wire#what-real-receivers-do"
+ACCEPT_OR_REJECT = [{"outcome": "accept"}, {"outcome": "reject"}]
+DECODE_BOTH = ["decode-le", "decode-be"]
+CODEC_BOTH = ["encode-le", "encode-be", "decode-le", "decode-be"]
+
+
+def add_acceptable(mc: MessageCases) -> None:
+    defs, mdef = mc.defs, mc.mdef
+    filled = samples.message(mdef.abbrev, samples.filled_fields(defs, mdef))
+    canonical, frames = mc.both_orders(filled)
+
+    def acceptable(path, *, frames, message, checks, clause, tags, reference="accept", outcomes=ACCEPT_OR_REJECT, **extra):
+        return mc.add(path, expect="acceptable", clause=clause, checks=checks, tags=["acceptable", *tags],
+                      frames=frames, message=message, outcomes=outcomes, reference=reference, **extra)
+
+    acceptable("trailing-bytes", frames={o: f + b"\x00\x11\x22" for o, f in frames.items()}, message=canonical,
+               checks=DECODE_BOTH, clause=RECEIVERS, tags=["framing", "trailing-bytes"],
+               comment="Three bytes follow the footer; DUNE and imcpy ignore them.")
+    acceptable("unused-payload", frames={o: with_unused_payload(f, o, 2) for o, f in frames.items()},
+               message=canonical, checks=DECODE_BOTH, clause=RECEIVERS, tags=["framing", "unused-payload"],
+               comment="The size field covers two bytes after the last field; they are CRC-covered and ignored.")
+    for f in mdef.fields:
+        for path, value, clause, tags, extra in field_cases(mc, f):
+            message = samples.with_field(filled, f.abbrev, value)
+            if extra.get("decode_only"):
+                extra.pop("decode_only")
+                msg_frames = {o: codec.encode(defs, message, o) for o in ("le", "be")}
+                acceptable(path, frames=msg_frames, message=message, checks=DECODE_BOTH, clause=clause,
+                           tags=[*tags, f"field:{f.abbrev}"], **extra)
+                continue
+            msg_canonical, msg_frames = mc.both_orders(message)
+            acceptable(path, frames=msg_frames, message=msg_canonical, checks=CODEC_BOTH, clause=clause,
+                       tags=[*tags, f"field:{f.abbrev}"], **extra)
+        for v in f.enum_values:
+            if f.is_int and not f.int_bounds[0] <= v.value <= f.int_bounds[1]:
+                add_out_of_type(mc, filled, f, v)
+
+
+def field_cases(mc: MessageCases, f: FieldDef):
+    """(path, value, clause, tags, extra) of each acceptable variant of one field."""
+    defs = mc.defs
+    if f.enum_kind == "enum":
+        known = {v.value for v in f.enum_values}
+        lo, hi = f.int_bounds
+        for value in sorted({next(x for x in range(lo, hi + 1) if x not in known), hi} - known):
+            yield (f"enum-out-of-table/{f.abbrev}/{value}", value, RECEIVERS, ["enum", "out-of-table"],
+                   {"comment": f"{value} is in no edition's table; DUNE and imcpy carry it unchanged."})
+    elif f.enum_kind == "bitfield":
+        defined = 0
+        for v in f.enum_values:
+            defined |= v.value
+        undefined = [1 << b for b in range(8 * f.size) if not defined & (1 << b)]
+        for bit in (undefined[0], undefined[-1]):
+            yield (f"bitfield-undefined/{f.abbrev}/0x{bit:x}", bit, RECEIVERS, ["bitfield", "undefined-bit"],
+                   {"comment": "A bit the table does not define; DUNE and imcpy carry it unchanged."})
+    elif f.is_float and (f.minimum is not None or f.maximum is not None):
+        outside = {"nan": "nan", "inf": "inf", "negative-inf": "-inf"}
+        if f.minimum is not None:
+            outside["below-min"] = next_float(f, f.minimum, -1)
+        if f.maximum is not None:
+            outside["above-max"] = next_float(f, f.maximum, +1)
+            outside["max-finite"] = F32_MAX if f.size == 4 else 1.7976931348623157e308
+        for name, value in outside.items():
+            yield (f"out-of-range/{f.abbrev}/{name}", value, f.range_source, ["out-of-range", f"class:{name}"],
+                   {"comment": "Outside the field's declared min/max; validation is optional, DUNE and imcpy carry it."})
+    elif f.type == "plaintext":
+        for name, raw in (("utf8", "ol\u00e1 \u00e9\u00e8".encode()), ("invalid-utf8", b"\xff\xfe\xc3"), ("latin1", b"caf\xe9")):
+            yield (f"text/{f.abbrev}/{name}", {"hex": raw.hex()}, "imc-wire#field-types", ["text", "non-ascii", f"class:{name}"],
+                   {"comment": "Plaintext is specified as ASCII; DUNE copies the raw bytes, so do receivers that accept."})
+    elif f.type in ("message", "message-list") and f.message_types:
+        other = samples.wrong_type(defs, f)
+        value = samples.filled_inline(defs, other, 0)
+        yield (f"wrong-inline-type/{f.abbrev}/{other.abbrev}", value if f.type == "message" else [value],
+               f.clause, ["inline", "wrong-type"],
+               {"decode_only": True,
+                "comment": f"{other.abbrev} where the definition names {', '.join(f.message_types)}; DUNE accepts any defined message."})
+    if f.type == "message-list":
+        element = samples.filled_inline(defs, samples.inner_types(defs, f)[0], 0)
+        yield (f"null-list-element/{f.abbrev}", [element, None], "imc-wire#field-types", ["list", "null-element"],
+               {"decode_only": True, "comment": "An element id FF FF is a null element; DUNE keeps it as a null entry."})
+
+
+def add_out_of_type(mc: MessageCases, filled: dict, f: FieldDef, v) -> None:
+    """An enum value that cannot fit its field (the seeds' UNSUPPORTED = 666 in a uint8): how does an encoder react?"""
+    lo, hi = f.int_bounds
+    truncated = v.value & hi if lo == 0 else v.value
+    alternatives = {"truncate": truncated, "saturate": hi if v.value > hi else lo}
+    outcomes = [{"outcome": "reject"}]
+    for name, value in alternatives.items():
+        _, frames = mc.both_orders(samples.with_field(filled, f.abbrev, value))
+        outcomes.append({"outcome": name, "frames": {o: fr.hex() for o, fr in frames.items()}})
+    editions = v.editions or mc.defs.editions
+    mc.add(f"enum-out-of-type/{f.abbrev}/{v.abbrev}-{v.value}", expect={e: "acceptable" for e in editions},
+           clause=v.source, checks=["encode-le", "encode-be"], tags=["acceptable", "enum", "out-of-type", f"field:{f.abbrev}", "edition-specific"],
+           message=samples.with_field(filled, f.abbrev, v.value), outcomes=outcomes, reference="reject",
+           erratum=erratum_of(v),
+           comment=(f"{v.abbrev} = {v.value} cannot be carried in {f.type}: imcpy refuses it, older DUNE builds "
+                    f"put {truncated} on the wire (truncation)."))
+    message = samples.with_field(filled, f.abbrev, truncated)
+    canonical, frames = mc.both_orders(message)
+    mc.add(f"enum-out-of-type/{f.abbrev}/{v.abbrev}-{v.value}-as-sent-by-old-dune", expect="acceptable", clause=v.source,
+           checks=DECODE_BOTH, tags=["acceptable", "enum", "out-of-table", f"field:{f.abbrev}"], frames=frames,
+           message=canonical, outcomes=ACCEPT_OR_REJECT, reference="accept", erratum=erratum_of(v),
+           comment=f"The byte old DUNE builds emitted for {v.abbrev}: out of every table, carried unchanged by DUNE and imcpy.")
+
+
+def erratum_of(v) -> str | None:
+    return v.source.split("#", 1)[1] if v.source.startswith("imc-wire#E") else None
+
+
+def next_float(f: FieldDef, x: float, direction: int) -> float:
+    """The next representable value of the field's width after ``x`` in ``direction``."""
+    fmt, ifmt = ("<f", "<i") if f.size == 4 else ("<d", "<q")
+    x = struct.unpack(fmt, struct.pack(fmt, x))[0]
+    bits = struct.unpack(ifmt, struct.pack(fmt, x))[0]
+    bits += direction if x >= 0 else -direction
+    if x == 0:
+        raise ValueError("next_float from zero is not needed here")
+    return struct.unpack(fmt, struct.pack(ifmt, bits))[0]
+
+
+def with_unused_payload(frame: bytes, order: str, extra: int) -> bytes:
+    """The frame with ``extra`` zero bytes appended to its payload, size and CRC updated."""
+    return reframe(frame, order, payload=payload_of(frame, order) + bytes(extra))

@@ -1,0 +1,83 @@
+"""Rebuild the IMC corpus: one vector file per message, the coverage table, deterministically.
+
+``imc-conformance generate`` (or ``python -m imc_conformance.corpus.build``) writes
+``vectors/imc/cases/*.json`` and ``vectors/imc/coverage.md``; ``--check`` only reports drift.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..definitions import Definitions, load_definitions
+from ..paths import imc_data
+from .acceptable import add_acceptable
+from .coverage import coverage_markdown
+from .invalid import add_invalid
+from .records import MessageCases
+from .valid import add_valid
+
+FORMAT_VERSION = 1
+
+
+def load_examples() -> dict[str, list[dict]]:
+    raw = json.loads(imc_data("examples.json").read_text(encoding="utf-8"))
+    by_message: dict[str, list[dict]] = {}
+    for example in raw["examples"]:
+        by_message.setdefault(example["message"]["abbrev"], []).append(example)
+    return by_message
+
+
+def build_corpus(defs: Definitions) -> dict[str, str]:
+    """File name (relative to vectors/imc) -> exact text, for every generated file."""
+    examples = load_examples()
+    files: dict[str, str] = {}
+    per_message = {}
+    for mdef in defs.suite_messages:
+        mc = MessageCases(defs, mdef)
+        add_valid(mc, examples.get(mdef.abbrev, []))
+        add_acceptable(mc)
+        add_invalid(mc)
+        doc = {
+            "$schema": "../../schema/vectors.schema.json",
+            "format": FORMAT_VERSION,
+            "suite": "imc",
+            "message": {"abbrev": mdef.abbrev, "id": mdef.id, "name": mdef.name, "clause": mdef.clause,
+                        "definition": mdef.hash},
+            "editions": list(defs.editions),
+            "cases": mc.cases,
+        }
+        per_message[mdef.abbrev] = mc.cases
+        files[f"cases/{mdef.id:03d}-{mdef.abbrev}.json"] = json.dumps(doc, indent=1, ensure_ascii=True) + "\n"
+    files["coverage.md"] = coverage_markdown(defs, per_message)
+    return files
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="imc-conformance generate", description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="report files that differ from a fresh build; write nothing")
+    args = parser.parse_args(argv)
+    root = imc_data()
+    files = build_corpus(load_definitions())
+    drift = [name for name, text in files.items()
+             if not (root / name).exists() or (root / name).read_text(encoding="utf-8") != text]
+    stale = [p.relative_to(root).as_posix() for p in sorted((root / "cases").glob("*.json"))
+             if p.relative_to(root).as_posix() not in files]
+    if args.check:
+        for name in drift + stale:
+            print(f"drift: vectors/imc/{name}")
+        return 1 if drift or stale else 0
+    (root / "cases").mkdir(exist_ok=True)
+    for name in stale:
+        (root / name).unlink()
+    for name in drift:
+        Path(root / name).write_text(files[name], encoding="utf-8")
+    total = sum(len(json.loads(t)["cases"]) for n, t in files.items() if n.startswith("cases/"))
+    print(f"{total} cases in {len(files) - 1} files; {len(drift)} written, {len(stale)} removed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

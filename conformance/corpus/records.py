@@ -1,0 +1,55 @@
+"""One vector record: id, expectation, clause, definition hashes, frames, message, checks, tags."""
+
+from __future__ import annotations
+
+from .. import codec
+from ..definitions import Definitions, MessageDef
+
+ALL_CHECKS = ["encode-le", "encode-be", "decode-le", "decode-be", "roundtrip"]
+
+
+def used_abbrevs(value, found: set[str]) -> set[str]:
+    """Every message abbreviation inside a decoded-form value."""
+    if isinstance(value, dict):
+        if "abbrev" in value and "fields" in value:
+            found.add(value["abbrev"])
+        for v in value.values():
+            used_abbrevs(v, found)
+    elif isinstance(value, list):
+        for v in value:
+            used_abbrevs(v, found)
+    return found
+
+
+class MessageCases:
+    """Collects the cases of one message's vector file, keeping ids unique."""
+
+    def __init__(self, defs: Definitions, mdef: MessageDef):
+        self.defs, self.mdef = defs, mdef
+        self.cases: list[dict] = []
+        self._ids: set[str] = set()
+
+    def add(self, path: str, *, expect, clause: str, checks: list[str], tags: list[str],
+            frames: dict[str, bytes] | None = None, message: dict | None = None, **extra) -> dict:
+        case_id = f"imc/{self.mdef.abbrev}/{path}"
+        if case_id in self._ids:
+            raise ValueError(f"duplicate case id {case_id}")
+        self._ids.add(case_id)
+        uses = used_abbrevs(message, {self.mdef.abbrev}) if message else {self.mdef.abbrev}
+        record = {"id": case_id, "expect": expect, "clause": clause,
+                  "definitions": {a: self.defs[a].hash for a in sorted(uses) if a in self.defs.by_abbrev},
+                  "checks": checks}
+        if frames is not None:
+            record["frames"] = {order: frame.hex() for order, frame in frames.items()}
+        if message is not None:
+            record["message"] = message
+        record.update({k: v for k, v in extra.items() if v is not None})
+        record["tags"] = sorted(set(tags))
+        self.cases.append(record)
+        return record
+
+    def both_orders(self, message: dict) -> tuple[dict, dict[str, bytes]]:
+        """The canonical (decoded) form of ``message`` and its frames in both byte orders."""
+        frames = {order: codec.encode(self.defs, message, order) for order in ("le", "be")}
+        canonical = codec.decode(self.defs, frames["le"])
+        return canonical, frames
