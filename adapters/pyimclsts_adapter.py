@@ -82,11 +82,6 @@ def generated_dir(timeout: float = 300) -> Path:
     return folder
 
 
-def generation_info() -> dict:
-    """What ``generated_dir`` recorded: pyimclsts version, IMC.xml, seconds the extractor took."""
-    return json.loads((generated_dir() / _MARKER).read_text(encoding="utf-8"))
-
-
 def _generate(folder: Path, timeout: float) -> None:
     xml = fetch_imc_xml()
     tmp = Path(tempfile.mkdtemp(prefix=folder.name + ".", suffix=".tmp", dir=folder.parent))
@@ -125,7 +120,11 @@ class _OsWithCwd(types.ModuleType):
 
 
 def _import_network(folder: Path):
-    """``pyimclsts.network``, loading the generated package found in ``folder``."""
+    """``pyimclsts.network``, loading the generated package found in ``folder``.
+
+    Its ``import os`` gets ``_OsWithCwd`` (kept as its ``_os``, read only at import); no other module
+    and no global state sees it.
+    """
     network = sys.modules.get("pyimclsts.network")
     if network is None:
         spec = importlib.util.find_spec("pyimclsts.network")
@@ -324,7 +323,7 @@ class PyimclstsAdapter:
 
     def _converter(self, abbrev) -> _Message | None:
         """The field converters of a message (cached); None if pyimclsts has no such class."""
-        conv = self._converters.get(abbrev)
+        conv = self._converters.get(abbrev) if isinstance(abbrev, str) else None
         if conv is None:
             cls = self._classes.get(abbrev) if isinstance(abbrev, str) else None
             if cls is None:
@@ -378,6 +377,6 @@ def adapter() -> PyimclstsAdapter:
     with _lock:
         if _instance is None:
             folder = generated_dir()
-            info = json.loads((folder / _MARKER).read_text(encoding="utf-8"))
+            info = json.loads((folder / _MARKER).read_text(encoding="utf-8"))  # includes the extractor's seconds
             _instance = PyimclstsAdapter(_import_network(folder), load_definitions(), info)
         return _instance

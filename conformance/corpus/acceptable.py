@@ -43,7 +43,7 @@ def add_acceptable(mc: MessageCases) -> None:
             if extra.get("decode_only"):
                 extra.pop("decode_only")
                 msg_frames = {o: codec.encode(defs, message, o) for o in ("le", "be")}
-                acceptable(path, frames=msg_frames, message=message, checks=DECODE_BOTH, clause=clause,
+                acceptable(path, frames=msg_frames, message=codec.decode(defs, msg_frames["le"]), checks=DECODE_BOTH, clause=clause,
                            tags=[*tags, f"field:{f.abbrev}"], **extra)
                 continue
             msg_canonical, msg_frames = mc.both_orders(message)

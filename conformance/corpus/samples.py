@@ -12,6 +12,9 @@ FILLED_INTS = {"uint8_t": 42, "int8_t": -5, "uint16_t": 4660, "int16_t": -1234, 
 
 
 def default_value(f: FieldDef):
+    """The zero of the field's type; for an enum whose table lacks 0, its lowest value in every edition."""
+    if f.enum_kind == "enum" and not any(v.value == 0 for v in f.enum_values):
+        return min(v.value for v in f.enum_values if v.editions is None)
     if f.is_float:
         return 0.0
     if f.is_int:

@@ -1,0 +1,131 @@
+"""The reference codec: CRC, round trips in both byte orders, typed errors with offsets, size limits."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from imc_conformance import codec
+from imc_conformance.crc16 import crc16
+from imc_conformance.definitions import load_definitions
+from imc_conformance.values import float_from_bits, float_to_bits, shortest_float
+
+DEFS = load_definitions()
+
+
+def test_crc16_arc_check_value():
+    assert crc16(b"123456789") == 0xBB3D
+    frame = codec.encode(DEFS, {"abbrev": "Heartbeat", "header": {}, "fields": {}}, "le")
+    assert crc16(frame) == 0  # a little-endian frame's CRC over itself, footer included, is 0
+
+
+def field_value(f, depth):
+    if f.is_float:
+        bits = st.integers(0, (1 << (8 * f.size)) - 1)
+        return bits.map(lambda b: float_from_bits(b, f.size))
+    if f.is_int:
+        lo, hi = f.int_bounds
+        return st.integers(lo, hi)
+    if f.type == "plaintext":
+        return st.one_of(st.text(st.characters(max_codepoint=127), max_size=20), st.binary(max_size=20).map(lambda b: {"hex": b.hex()} if not b.isascii() else b.decode()))
+    if f.type == "rawdata":
+        return st.binary(max_size=40).map(bytes.hex)
+    inner = st.none() if depth > 1 else st.one_of(st.none(), st.sampled_from(DEFS.suite_messages).flatmap(lambda m: inline(m, depth + 1)))
+    return inner if f.type == "message" else st.lists(inner.filter(lambda v: v is not None), max_size=3)
+
+
+def inline(mdef, depth):
+    return st.fixed_dictionaries({f.abbrev: field_value(f, depth) for f in mdef.fields}).map(lambda fs: {"abbrev": mdef.abbrev, "fields": fs})
+
+
+header = st.fixed_dictionaries({"timestamp": st.integers(0, (1 << 64) - 1).map(lambda b: float_from_bits(b, 8)),
+                                "src": st.integers(0, 0xFFFF), "src_ent": st.integers(0, 0xFF),
+                                "dst": st.integers(0, 0xFFFF), "dst_ent": st.integers(0, 0xFF)})
+messages = st.sampled_from(DEFS.messages).flatmap(
+    lambda m: st.tuples(header, inline(m, 0)).map(lambda t: {"abbrev": t[1]["abbrev"], "header": t[0], "fields": t[1]["fields"]}))
+
+
+@settings(max_examples=300, deadline=None)
+@given(messages, st.sampled_from(["le", "be"]))
+def test_round_trip_in_both_byte_orders(message, order):
+    frame = codec.encode(DEFS, message, order)
+    assert frame[:2] == (b"\x54\xfe" if order == "le" else b"\xfe\x54")
+    assert codec.decode(DEFS, frame) == message
+    other = codec.encode(DEFS, message, "be" if order == "le" else "le")
+    assert len(other) == len(frame) and codec.decode(DEFS, other) == message
+
+
+@settings(max_examples=500, deadline=None)
+@given(st.binary(max_size=80))
+def test_decoding_garbage_only_raises_frame_errors(data):
+    try:
+        codec.decode(DEFS, data)
+    except codec.FrameError as exc:
+        assert 0 <= exc.offset <= max(len(data), 20)
+
+
+@settings(max_examples=200, deadline=None)
+@given(messages, st.data())
+def test_any_single_bit_flip_is_caught_or_decodes_consistently(message, data):
+    frame = bytearray(codec.encode(DEFS, message, "le"))
+    bit = data.draw(st.integers(0, 8 * len(frame) - 1))
+    frame[bit // 8] ^= 1 << (bit % 8)
+    with pytest.raises(codec.FrameError):
+        codec.decode(DEFS, bytes(frame))  # CRC-16 catches every single-bit error
+
+
+def test_errors_carry_rule_and_offset():
+    frame = codec.encode(DEFS, {"abbrev": "LblRange", "header": {}, "fields": {"id": 2, "range": 152.25}}, "le")
+    cases = {
+        frame[:10]: ("header-truncated", 10),
+        b"\x55" + frame[1:]: ("sync", 0),
+        frame[:-1]: ("size-exceeds-data", len(frame) - 1),
+        frame[:-1] + bytes([frame[-1] ^ 1]): ("crc", 25),
+    }
+    for data, (rule, offset) in cases.items():
+        with pytest.raises(codec.FrameError) as err:
+            codec.decode(DEFS, data)
+        assert (err.value.rule, err.value.offset) == (rule, offset)
+
+
+def test_encoder_refuses_a_payload_over_65513_bytes():
+    ok = {"abbrev": "TextMessage", "header": {}, "fields": {"origin": "", "text": "x" * 65509}}
+    assert len(codec.encode(DEFS, ok, "le")) == 65535
+    with pytest.raises(codec.EncodeError) as err:
+        codec.encode(DEFS, dict(ok, fields={"origin": "", "text": "x" * 65510}), "le")
+    assert err.value.rule == "size-limit"
+
+
+def test_encoder_refuses_values_outside_the_field_type():
+    msg = {"abbrev": "AcousticStatus", "header": {}, "fields": {"req_id": 1, "type": 0, "status": 666, "info": "", "range": 0.0}}
+    with pytest.raises(codec.EncodeError) as err:
+        codec.encode(DEFS, msg, "le")
+    assert err.value.rule == "value-out-of-type"
+
+
+def test_layout_names_every_byte():
+    msg = {"abbrev": "AcousticOperation", "header": {}, "fields": {"op": 11, "system": "b1", "range": 0.0,
+                                                                  "msg": {"abbrev": "LblRange", "fields": {"id": 1, "range": 10.5}}}}
+    frame = codec.encode(DEFS, msg, "le")
+    spans = codec.layout(DEFS, frame)
+    covered = sorted(i for s in spans for i in range(s.start, s.end))
+    assert covered == list(range(len(frame)))
+    assert [s.path for s in spans if s.start == 32] == ["AcousticOperation.msg.LblRange.range"]
+
+
+@pytest.mark.parametrize("value,width,bits", [
+    (-0.0, 4, 0x80000000), ("nan", 4, 0x7FC00000), ("nan:7fc00001", 4, 0x7FC00001), ("-inf", 8, 0xFFF0000000000000),
+    (152.25, 4, 0x43184000), (0.1, 4, 0x3DCCCCCD)])
+def test_float_values_and_bits(value, width, bits):
+    assert float_to_bits(value, width) == bits
+    assert float_to_bits(float_from_bits(bits, width), width) == bits
+
+
+def test_fp32_values_are_written_as_the_shortest_round_trip_decimal():
+    f = struct.unpack("<f", struct.pack("<f", 0.1))[0]
+    assert repr(shortest_float(f, 4)) == "0.1"
+    assert repr(float_from_bits(0x00000001, 4)) == "1e-45"
+    assert repr(float_from_bits(0x7F7FFFFF, 4)) == "3.4028235e+38"

@@ -1,0 +1,168 @@
+"""The corpus proven against the real implementations of IMC.
+
+imcpy (DUNE's own C++ codec) must agree with every vector except where a documented erratum says
+otherwise; pyimclsts's defects must show up as failures, each explained by an erratum, and every
+erratum must still be observed (a fixed defect makes its erratum stale, and this test says so).
+"""
+
+from __future__ import annotations
+
+import collections
+import fnmatch
+
+import imcpy
+import pytest
+
+from imc_conformance import codec
+from imc_conformance.corpus_data import implementation_errata, load_errata
+from imc_conformance.evaluate import Judge, Verdict, expectation, plan, worst
+from imc_conformance.library import ask
+
+EDITION = "imc-5.4.30"  # what imcpy 1.1.2 speaks
+PASSING = {Verdict.PASS, Verdict.IMPL_DEFINED}
+
+
+def run(adapter, cases, defs, edition=EDITION):
+    judge, emits = Judge(defs), set(adapter.hello()["byte_orders"])
+    verdicts = {}
+    for case in cases:
+        if "erratum" in case and case["erratum"] == "I2" and adapter.hello()["implementation"].startswith("imcpy"):
+            continue  # imcpy's verdict depends on memory past the frame (erratum I2): not reproducible
+        results = [judge.judge(case, edition, r, ask(adapter, "imc", case, r)) for r in plan(case, edition, emits)]
+        if results:
+            verdicts[case["id"]] = (worst(results), results)
+    return verdicts
+
+
+def unexplained(verdicts, implementation):
+    return {cid: [r.detail for r in results if r.verdict not in PASSING][:2]
+            for cid, (v, results) in verdicts.items()
+            if v not in PASSING and not implementation_errata(cid, implementation)}
+
+
+def stale_globs(verdicts, implementation):
+    failing = [cid for cid, (v, _) in verdicts.items() if v not in PASSING]
+    return [(e["id"], g) for e in load_errata() if e.get("implementation") == implementation
+            for g in e["cases"] if not fnmatch.filter(failing, g)]
+
+
+@pytest.fixture(scope="module")
+def imcpy_verdicts(imcpy_adapter, cases, defs):
+    return run(imcpy_adapter, cases, defs)
+
+
+def test_imcpy_agrees_with_every_vector_but_documented_errata(imcpy_verdicts):
+    assert unexplained(imcpy_verdicts, "imcpy") == {}
+    counts = collections.Counter(v for v, _ in imcpy_verdicts.values())
+    assert counts[Verdict.PASS] > 3000 and counts[Verdict.ADAPTER_ERROR] == 0
+
+
+def test_imcpy_errata_are_still_observed(imcpy_verdicts):
+    assert stale_globs(imcpy_verdicts, "imcpy") == []
+
+
+def test_every_valid_le_frame_is_imcpys_serialization(imcpy_verdicts, cases):
+    valid = [c for c in cases if expectation(c, EDITION) == "valid"]
+    assert len(valid) > 900
+    for case in valid:
+        results = {r.check: r for r in imcpy_verdicts[case["id"]][1]}
+        assert results["encode-le"].verdict is Verdict.PASS, (case["id"], results["encode-le"].detail)
+        assert results["decode-be"].verdict is Verdict.PASS, (case["id"], results["decode-be"].detail)
+        assert "encode-be" not in results  # imcpy only emits little-endian: not applicable
+
+
+def test_every_invalid_case_is_rejected_by_imcpy(imcpy_verdicts, cases):
+    invalid = [c for c in cases if expectation(c, EDITION) == "invalid" and c.get("erratum") != "I2"]
+    assert len(invalid) > 2400
+    for case in invalid:
+        verdict, results = imcpy_verdicts[case["id"]]
+        assert verdict in (Verdict.PASS, Verdict.NON_STRICT), (case["id"], [r.detail for r in results])
+
+
+def test_i2_cases_do_not_crash_imcpy(cases):
+    """Erratum I2: DUNE reads past the frame; the verdict is memory-dependent, but imcpy must return."""
+    i2 = [c for c in cases if c.get("erratum") == "I2"]
+    assert i2
+    for case in i2:
+        (order, frame), = case["frames"].items()
+        try:
+            imcpy.Packet.deserialize(bytes.fromhex(frame))
+        except RuntimeError:
+            pass
+
+
+def test_imcpy_error_text_per_rule(imcpy_adapter, cases):
+    """The documented table: the DUNE error text imcpy gives for each rule (adapters/README.md)."""
+    texts = collections.defaultdict(set)
+    for case in cases:
+        if expectation(case, EDITION) != "invalid" or case.get("erratum") == "I2":
+            continue
+        (order, frame), = ((o, f) for o, f in case["frames"].items())
+        try:
+            imcpy.Packet.deserialize(bytes.fromhex(frame))
+        except RuntimeError as exc:
+            texts[case["rule"]].add(str(exc).split(":")[0])
+    assert dict(texts) == IMCPY_ERROR_TEXTS
+
+
+IMCPY_ERROR_TEXTS = {
+    "header-truncated": {"buffer is too short to be unpacked"},
+    "sync": {"invalid synchronization number"},
+    "size-limit": {"buffer is too short to be unpacked"},
+    "size-exceeds-data": {"buffer is too short to be unpacked"},
+    "crc": {"invalid CRC"},
+    "unknown-id": {"invalid message identification number"},
+    "field-overrun": {"buffer is too short to be unpacked", "invalid message identification number"},
+    "length-overrun": {"buffer is too short to be unpacked"},
+    "list-count-overrun": {"invalid message identification number"},
+    "unknown-inline-id": {"invalid message identification number"},
+}
+
+
+def test_accepted_frames_keep_every_byte_in_dune(cases, defs):
+    """Acceptable cases DUNE accepts: its C++ carries every value unchanged (re-serialising gives the frame)."""
+    checked = 0
+    for case in cases:
+        if expectation(case, EDITION) != "acceptable" or case["reference"] != "accept":
+            continue
+        for check in case["checks"]:
+            op, order = check.split("-")
+            if op != "decode":
+                continue
+            decoded = imcpy.Packet.deserialize(bytes.fromhex(case["frames"][order]))
+            assert decoded.serialize() == codec.encode(defs, case["message"], "le"), case["id"]
+            checked += 1
+    assert checked > 200
+
+
+def test_acceptable_cases_match_the_reference_behaviour(imcpy_verdicts, cases):
+    """imc-wire.md lists what real receivers do; imcpy, DUNE's codec, must do exactly that."""
+    for case in cases:
+        if expectation(case, EDITION) != "acceptable" or case["id"] not in imcpy_verdicts:
+            continue
+        for r in imcpy_verdicts[case["id"]][1]:
+            if r.verdict is Verdict.IMPL_DEFINED:
+                assert r.outcome == case["reference"], (case["id"], r.check, r.outcome)
+
+
+@pytest.fixture(scope="module")
+def pyimclsts_verdicts(pyimclsts_adapter, cases, defs):
+    return run(pyimclsts_adapter, cases, defs)
+
+
+def test_pyimclsts_produces_the_same_be_bytes(pyimclsts_verdicts, cases):
+    checked = 0
+    for case in cases:
+        if expectation(case, EDITION) != "valid" or implementation_errata(case["id"], "pyimclsts"):
+            continue
+        results = {r.check: r for r in pyimclsts_verdicts[case["id"]][1]}
+        assert results["encode-be"].verdict is Verdict.PASS, (case["id"], results["encode-be"].detail)
+        checked += 1
+    assert checked > 900
+
+
+def test_pyimclsts_failures_are_exactly_its_documented_defects(pyimclsts_verdicts):
+    assert unexplained(pyimclsts_verdicts, "pyimclsts") == {}
+    assert stale_globs(pyimclsts_verdicts, "pyimclsts") == []
+    failing = sum(1 for v, _ in pyimclsts_verdicts.values() if v not in PASSING)
+    assert failing > 1000  # no CRC and no sync check: the report must show it
