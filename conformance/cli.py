@@ -1,146 +1,224 @@
-"""``imc-conformance``: list the corpus, run it against an implementation, rebuild it."""
+"""``imc-conformance``: run the corpus against an implementation, list it, re-render reports, rebuild it."""
 
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import fnmatch
 import importlib
+import importlib.util
 import json
+import shlex
 import sys
-from collections import Counter
 from pathlib import Path
 
-from .corpus_data import implementation_errata, load_cases
+from .corpus_data import load_cases
 from .definitions import load_definitions
-from .evaluate import Judge, Verdict, expectation, plan, worst
-from .library import ask
+from .evaluate import expectation
+from .results import FAILING, RunResult
+from .session import AdapterStartError
 
-BUILTIN_ADAPTERS = {
+LIBRARY_ADAPTERS = {
     "imcpy": "imc_conformance.adapters.imcpy_adapter:adapter",
     "pyimclsts": "imc_conformance.adapters.pyimclsts_adapter:adapter",
 }
-DEFAULT_EDITION = "imc-5.4.30"
-FAILING = {Verdict.FAIL, Verdict.CRASH, Verdict.TIMEOUT}
+SHIMS = {"imcpy-shim": "imcpy_shim.py", "pyimclsts-shim": "pyimclsts_shim.py"}
+EDITIONS = ("imc-5.4.30", "imc-5.4.11")
+REPORTS = ("json", "junit", "markdown", "html")
 
 
 class UsageError(Exception):
     pass
 
 
-def load_adapter(spec: str):
-    """An adapter from a built-in name, ``module:attribute`` or ``path/to/file.py:attribute``."""
-    spec = BUILTIN_ADAPTERS.get(spec, spec)
+def load_library_adapter(spec: str):
+    """An adapter object from a built-in name, ``module:attribute`` or ``path/to/file.py:attribute``."""
+    spec = LIBRARY_ADAPTERS.get(spec, spec)
     target, _, attr = spec.rpartition(":")
     if not target or not attr:
-        raise UsageError(f"adapter {spec!r}: expected a built-in name ({', '.join(BUILTIN_ADAPTERS)}) or module:attribute")
+        raise UsageError(f"adapter {spec!r}: expected {', '.join([*LIBRARY_ADAPTERS, *SHIMS])}, module:attribute "
+                         "or file.py:attribute (or --adapter-cmd for a subprocess)")
     try:
         if target.endswith(".py"):
-            path = Path(target)
-            loader = importlib.util.spec_from_file_location(path.stem, path)
-            if loader is None or not path.exists():
+            if not Path(target).is_file():
                 raise UsageError(f"adapter file {target} does not exist")
-            module = importlib.util.module_from_spec(loader)
-            loader.loader.exec_module(module)
+            spec_ = importlib.util.spec_from_file_location(Path(target).stem, target)
+            module = importlib.util.module_from_spec(spec_)
+            spec_.loader.exec_module(module)
         else:
             module = importlib.import_module(target)
         factory = getattr(module, attr)
+        return factory if hasattr(factory, "decode") else factory()
     except UsageError:
         raise
     except Exception as exc:
         raise UsageError(f"cannot load adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
-    try:
-        return factory() if callable(factory) and not hasattr(factory, "decode") else factory
-    except Exception as exc:
-        raise UsageError(f"adapter {spec!r} failed to start: {type(exc).__name__}: {exc}") from exc
 
 
-def select(cases: list[dict], edition: str, messages: list[str], ids: list[str], tags: list[str]) -> list[dict]:
+def open_session(args):
+    """The session for --adapter / --adapter-cmd."""
+    from .library import LibrarySession
+
+    if args.adapter_cmd or args.adapter in SHIMS:
+        from .subprocess_session import SubprocessSession
+
+        argv = shlex.split(args.adapter_cmd) if args.adapter_cmd else shim_argv(args.adapter)
+        return SubprocessSession(argv, name=args.adapter_cmd or args.adapter, timeout=args.timeout)
+    return LibrarySession(load_library_adapter(args.adapter), args.adapter)
+
+
+def shim_argv(name: str) -> list[str]:
+    shim = Path(__file__).resolve().parent.parent / "adapters" / SHIMS[name]
+    if not shim.exists():  # installed package: adapters/ is imc_conformance/adapters
+        shim = Path(importlib.import_module("imc_conformance.adapters").__file__).parent / SHIMS[name]
+    argv = [sys.executable, str(shim)]
+    if name == "pyimclsts-shim":
+        from .imc_xml import cache_dir, fetch_imc_xml
+        argv += ["--imc-xml", str(fetch_imc_xml()), "--cache", str(cache_dir() / "pyimclsts-shim")]
+    return argv
+
+
+def select(cases: list[dict], args) -> list[dict]:
     out = []
     for case in cases:
-        if expectation(case, edition) is None:
+        if expectation(case, args.edition) is None:
             continue
-        if messages and case["id"].split("/")[1] not in messages:
+        if args.message and case["id"].split("/")[1] not in args.message:
             continue
-        if ids and not any(fnmatch.fnmatchcase(case["id"], g) for g in ids):
+        if args.id and not any(fnmatch.fnmatchcase(case["id"], g) for g in args.id):
             continue
-        if tags and not set(tags) & set(case["tags"]):
+        if args.tag and not set(args.tag) & set(case["tags"]):
             continue
         out.append(case)
     return out
 
 
 def command_list(args) -> int:
-    for case in select(load_cases(), args.edition, args.message, args.id, args.tag):
+    for case in select(load_cases(), args):
         print(f"{case['id']}\t{expectation(case, args.edition)}\t{case['clause']}")
     return 0
 
 
 def command_run(args) -> int:
     from rich.console import Console
-    from rich.table import Table
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    from .render_terminal import print_result
+    from .runner import run_cases
+    from .waivers import WaiverError, load_waivers
 
     defs = load_definitions()
-    if args.message and (unknown := set(args.message) - set(defs.by_abbrev)):
+    unknown = set(args.message) - set(defs.by_abbrev)
+    if unknown:
         raise UsageError(f"unknown message(s): {', '.join(sorted(unknown))}")
-    adapter = load_adapter(args.adapter)
-    hello = adapter.hello()
-    implementation, emits = str(hello.get("implementation", args.adapter)), set(hello.get("byte_orders", ()))
-    cases = select(load_cases(), args.edition, args.message, args.id, args.tag)
-    judge = Judge(defs)
-    per_message: dict[str, Counter] = {}
-    message_errata: dict[str, set] = {}
-    rows = []
-    for case in cases:
-        results = [judge.judge(case, args.edition, r, ask(adapter, "imc", case, r)) for r in plan(case, args.edition, emits)]
-        verdict = worst(results) if results else Verdict.UNSUPPORTED
-        per_message.setdefault(case["id"].split("/")[1], Counter())[verdict] += 1
-        errata = implementation_errata(case["id"], args.adapter) if verdict in FAILING else []
-        message_errata.setdefault(case["id"].split("/")[1], set()).update(errata)
-        rows.append({"id": case["id"], "verdict": verdict.value, "errata": errata,
-                     "checks": [{"check": r.check, "verdict": r.verdict.value, "detail": r.detail, "outcome": r.outcome} for r in results]})
-    console = Console(highlight=False)
-    table = Table(title=f"{implementation} against the IMC corpus ({args.edition})")
-    for col in ("message", "verdict", "PASS", "FAIL", "NON_STRICT", "IMPL_DEFINED", "other", "known errata"):
-        table.add_column(col)
-    failed_messages = 0
-    for abbrev, counts in per_message.items():
-        bad = sum(counts[v] for v in FAILING) or (args.strict and counts[Verdict.NON_STRICT])
-        failed_messages += bool(bad)
-        other = sum(n for v, n in counts.items() if v not in (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED))
-        table.add_row(abbrev, "[red]FAIL[/]" if bad else "[green]PASS[/]", str(counts[Verdict.PASS]), str(counts[Verdict.FAIL]),
-                      str(counts[Verdict.NON_STRICT]), str(counts[Verdict.IMPL_DEFINED]), str(other),
-                      ", ".join(sorted(message_errata[abbrev])))
-    console.print(table)
-    totals = Counter(r["verdict"] for r in rows)
-    explained = sum(1 for r in rows if r["verdict"] == "FAIL" and r["errata"])
-    console.print(f"{len(rows)} cases: " + ", ".join(f"{n} {v}" for v, n in sorted(totals.items()))
-                  + (f" ({explained} failures are documented errata of {args.adapter})" if explained else ""))
-    if args.json:
-        Path(args.json).write_text(json.dumps({"suite": "imc", "edition": args.edition, "implementation": implementation,
-                                               "summary": dict(totals), "cases": rows}, indent=1), encoding="utf-8")
-    return 1 if failed_messages else 0
+    everything = load_cases()
+    cases = select(everything, args)
+    if not cases:
+        raise UsageError("the selection matches no case")
+    waivers, notes = {}, []
+    if args.waivers:
+        try:
+            waivers, notes = load_waivers(Path(args.waivers), {c["id"] for c in everything}, dt.date.today())
+        except WaiverError as exc:
+            raise UsageError(str(exc)) from exc
+    console = Console(stderr=False, highlight=False)
+    session = open_session(args)
+    try:
+        with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                      console=Console(stderr=True), transient=True, disable=args.no_progress) as bar:
+            task = bar.add_task("running", total=None)
+            result = run_cases(session, cases, defs=defs, edition=args.edition, adapter=args.adapter_cmd or args.adapter,
+                               waivers=waivers, strict=args.strict, notes=notes,
+                               progress=lambda n: bar.update(task, completed=n))
+    except AdapterStartError as exc:
+        raise UsageError(str(exc)) from exc
+    finally:
+        session.close()
+    print_result(result, console)
+    write_reports(result, args)
+    if args.write_waivers:
+        from .waivers import waivers_document
+        failing = [c.id for c in result.cases if c.verdict in FAILING]
+        reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
+        Path(args.write_waivers).write_text(json.dumps(waivers_document(failing, reason), indent=1) + "\n", encoding="utf-8")
+        console.print(f"wrote {len(failing)} waivers to {args.write_waivers}")
+    return result.exit_code()
+
+
+def write_reports(result: RunResult, args) -> None:
+    from .render import RENDERERS
+
+    for fmt in REPORTS:
+        target = getattr(args, fmt)
+        if target:
+            Path(target).parent.mkdir(parents=True, exist_ok=True)
+            Path(target).write_text(RENDERERS[fmt](result), encoding="utf-8")
+
+
+def command_report(args) -> int:
+    from rich.console import Console
+
+    from .render_terminal import print_result
+
+    try:
+        result = RunResult.from_dict(json.loads(Path(args.result).read_text(encoding="utf-8")))
+    except (OSError, ValueError, KeyError) as exc:
+        raise UsageError(f"cannot read result {args.result}: {exc}") from exc
+    print_result(result, Console(highlight=False))
+    write_reports(result, args)
+    return result.exit_code()
+
+
+def add_selection(parser) -> None:
+    parser.add_argument("--edition", default=EDITIONS[0], choices=EDITIONS,
+                        help="imc-5.4.30: what imcpy and deployed DUNE speak (default); imc-5.4.11: the seeds as written")
+    parser.add_argument("--message", action="append", default=[], metavar="ABBREV", help="only this message (repeatable)")
+    parser.add_argument("--id", action="append", default=[], metavar="GLOB", help="only case ids matching (repeatable)")
+    parser.add_argument("--tag", action="append", default=[], help="only cases with this tag (repeatable), e.g. invalid")
+
+
+def add_reports(parser) -> None:
+    for fmt in REPORTS:
+        parser.add_argument(f"--{fmt}", metavar="FILE", help=f"write the {fmt} report to FILE")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="imc-conformance",
+        description="Conformance suite for IMC networking and acoustic messages. "
+                    "Start with: imc-conformance run --adapter imcpy",
+        epilog="Exit codes: 0 every message passes, 1 a failure (FAIL, CRASH, TIMEOUT, WAIVER_STALE; NON_STRICT with "
+               "--strict), 2 a usage or adapter error.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="run the corpus against an implementation")
+    run.add_argument("--adapter", default="imcpy",
+                     help="library adapter: imcpy (default), pyimclsts, module:attribute or file.py:attribute; "
+                          "subprocess shims: imcpy-shim, pyimclsts-shim")
+    run.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter speaking JSON lines (adapters/README.md); "
+                                                          "split like a shell would, but never run by one")
+    run.add_argument("--timeout", type=float, default=5.0, help="seconds per request for subprocess adapters (default 5)")
+    add_selection(run)
+    run.add_argument("--strict", action="store_true", help="NON_STRICT verdicts fail too")
+    run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids with a reason and optional expiry")
+    run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_reports(run)
+    run.set_defaults(func=command_run)
+    lst = sub.add_parser("list", help="list the selected cases (id, expectation, clause)")
+    add_selection(lst)
+    lst.set_defaults(func=command_list)
+    rep = sub.add_parser("report", help="re-render a saved JSON result")
+    rep.add_argument("result", help="a file written by run --json")
+    add_reports(rep)
+    rep.set_defaults(func=command_report)
+    gen = sub.add_parser("generate", help="rebuild vectors/imc/cases and the coverage table from the definitions")
+    gen.add_argument("--check", action="store_true", help="only report drift; exit 1 if any")
+    gen.set_defaults(func=lambda a: importlib.import_module("imc_conformance.corpus.build").main(["--check"] if a.check else []))
+    return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="imc-conformance", description="Conformance suite for IMC messages (LSTS).")
-    sub = parser.add_subparsers(dest="command", required=True)
-    common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("--edition", default=DEFAULT_EDITION, help=f"imc-5.4.11 (the seeds) or imc-5.4.30 (default: {DEFAULT_EDITION})")
-    common.add_argument("--message", action="append", default=[], help="only this message (repeatable), e.g. LblRange")
-    common.add_argument("--id", action="append", default=[], help="only case ids matching this glob (repeatable)")
-    common.add_argument("--tag", action="append", default=[], help="only cases with this tag (repeatable)")
-    sub.add_parser("list", parents=[common], help="list the selected cases").set_defaults(func=command_list)
-    run = sub.add_parser("run", parents=[common], help="run the corpus against an implementation")
-    run.add_argument("--adapter", default="imcpy", help="imcpy (default), pyimclsts, module:attribute or file.py:attribute")
-    run.add_argument("--strict", action="store_true", help="NON_STRICT verdicts fail too")
-    run.add_argument("--json", metavar="FILE", help="also write the results as JSON")
-    run.set_defaults(func=command_run)
-    gen = sub.add_parser("generate", help="rebuild vectors/imc/cases and the coverage table from the definitions")
-    gen.add_argument("--check", action="store_true", help="only report drift")
-    gen.set_defaults(func=lambda a: __import__("imc_conformance.corpus.build", fromlist=["main"]).main(["--check"] if a.check else []))
-    args = parser.parse_args(argv)
-    if args.edition not in ("imc-5.4.11", "imc-5.4.30") if hasattr(args, "edition") else False:
-        parser.error(f"unknown edition {args.edition!r}")
+    args = build_parser().parse_args(argv)
     try:
         return args.func(args)
     except UsageError as exc:

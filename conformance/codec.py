@@ -163,7 +163,7 @@ def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None) -> 
     ts_bits, src, src_ent, dst, dst_ent = struct.unpack_from(e + "QHBHB", frame, 6)
     if spans is not None:
         spans += [Span(start, start + size_, f"header.{name}", type_, "header") for start, size_, name, type_ in HEADER_LAYOUT]
-        spans.append(Span(end, end + 2, "footer.crc", "uint16_t", "footer"))
+        spans.append(Span(end, end + 2, "footer.crc16", "uint16_t", "footer"))
     reader = _Reader(defs, frame, e, end, spans)
     fields = reader.fields(mdef, HEADER_SIZE, mdef.abbrev)
     header = {"timestamp": float_from_bits(ts_bits, 8), "src": src, "src_ent": src_ent, "dst": dst, "dst_ent": dst_ent}

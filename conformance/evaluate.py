@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 
-from .codec import layout
+from .codec import EncodeError, encode, layout
 from .compare import Comparator
 from .definitions import Definitions
 
@@ -18,12 +18,14 @@ from .definitions import Definitions
 class Verdict(str, Enum):
     PASS = "PASS"
     FAIL = "FAIL"
-    NON_STRICT = "NON_STRICT"  # right outcome, wrong rule named
-    IMPL_DEFINED = "IMPL_DEFINED"
+    NON_STRICT = "NON_STRICT"  # right outcome, but the rejection named the wrong rule
+    IMPL_DEFINED = "IMPL_DEFINED"  # an acceptable case: recorded with what the implementation did
     UNSUPPORTED = "UNSUPPORTED"
     CRASH = "CRASH"
     TIMEOUT = "TIMEOUT"
     ADAPTER_ERROR = "ADAPTER_ERROR"
+    WAIVED = "WAIVED"  # a failure a waiver covers
+    WAIVER_STALE = "WAIVER_STALE"  # a waived case that now passes: the waiver must go
 
 
 @dataclass(frozen=True)
@@ -45,11 +47,23 @@ class Answer:
 
 
 @dataclass(frozen=True)
+class ByteDiff:
+    """Bytes ``[start, end)`` differ between the expected and actual frame; ``field`` owns them in the expected one."""
+
+    start: int
+    end: int
+    field: str
+
+
+@dataclass(frozen=True)
 class CheckResult:
     check: str
     verdict: Verdict
     detail: str
     outcome: str | None = None  # for acceptable cases: which permitted outcome the implementation chose
+    expected: str | None = None  # hex frames, kept for failures so reports can show them side by side
+    actual: str | None = None
+    diffs: tuple[ByteDiff, ...] = ()
 
 
 FAILURE_KINDS = {"crash": Verdict.CRASH, "timeout": Verdict.TIMEOUT, "adapter-error": Verdict.ADAPTER_ERROR,
@@ -99,15 +113,16 @@ class Judge:
         check = request.check
         if answer.kind == "rejected":
             return CheckResult(check, Verdict.FAIL, f"refused a valid {request.op}: {answer.reason}")
+        expected = bytes.fromhex(case["frames"][request.byte_order])
         if request.op == "decode":
             diffs = self.compare.messages(case["message"], answer.message,
                                           nan_payload=case.get("compare", {}).get("nan_payload", False))
             if diffs:
-                return CheckResult(check, Verdict.FAIL, "; ".join(str(d) for d in diffs[:5]))
+                return self.failure(check, "; ".join(str(d) for d in diffs[:5]), expected,
+                                    self.reencoded(answer.message, request.byte_order))
             return CheckResult(check, Verdict.PASS, "decoded as expected")
-        expected = bytes.fromhex(case["frames"][request.byte_order])
         if answer.frame != expected:
-            return CheckResult(check, Verdict.FAIL, self.frame_difference(expected, answer.frame))
+            return self.failure(check, self.frame_difference(expected, answer.frame), expected, answer.frame)
         return CheckResult(check, Verdict.PASS, "frame matches" if request.op == "encode" else "re-encoded to the same frame")
 
     def _invalid(self, case, request, answer) -> CheckResult:
@@ -131,14 +146,49 @@ class Judge:
                                           nan_payload=case.get("compare", {}).get("nan_payload", False))
             if not diffs and "accept" in permitted:
                 return CheckResult(check, Verdict.IMPL_DEFINED, "accepted", "accept")
-            return CheckResult(check, Verdict.FAIL, "accepted, but decoded wrongly: " + "; ".join(str(d) for d in diffs[:5]))
+            expected = bytes.fromhex(case["frames"][request.byte_order])
+            return self.failure(check, "accepted, but decoded wrongly: " + "; ".join(str(d) for d in diffs[:5]),
+                                expected, self.reencoded(answer.message, request.byte_order))
         frames = {name: o.get("frames", case.get("frames")) for name, o in permitted.items() if name != "reject"}
         for name, candidate in frames.items():
             if candidate and candidate.get(request.byte_order) == (answer.frame or b"").hex():
                 return CheckResult(check, Verdict.IMPL_DEFINED, f"{name}: {answer.frame.hex()[:64]}", name)
-        reference = (frames.get("accept") or next(iter(frames.values()), {})).get(request.byte_order)
-        detail = self.frame_difference(bytes.fromhex(reference), answer.frame) if reference else "no permitted frame"
-        return CheckResult(check, Verdict.FAIL, "encoded to a frame no outcome permits: " + detail)
+        reference = bytes.fromhex((frames.get("accept") or next(iter(frames.values()), {}))[request.byte_order])
+        return self.failure(check, "encoded to a frame no outcome permits: " + self.frame_difference(reference, answer.frame),
+                            reference, answer.frame)
+
+    def failure(self, check: str, detail: str, expected: bytes, actual: bytes | None) -> CheckResult:
+        """A FAIL that keeps both frames and the differing byte ranges, named by field."""
+        return CheckResult(check, Verdict.FAIL, detail, expected=expected.hex(),
+                           actual=None if actual is None else actual.hex(), diffs=self.byte_diffs(expected, actual))
+
+    def reencoded(self, message, byte_order: str) -> bytes | None:
+        """The reference encoding of an implementation's decoded message, to show what it understood."""
+        try:
+            return encode(self.defs, message, byte_order)
+        except (EncodeError, KeyError, TypeError, AttributeError):
+            return None
+
+    def byte_diffs(self, expected: bytes, actual: bytes | None) -> tuple[ByteDiff, ...]:
+        """Runs of differing bytes, split at field boundaries of the expected frame."""
+        if actual is None:
+            return ()
+        try:
+            spans = layout(self.defs, expected)
+        except ValueError:
+            spans = []
+        owner = {i: s.path for s in spans for i in range(s.start, s.end)}
+        out: list[ByteDiff] = []
+        for i in range(max(len(expected), len(actual))):
+            differs = i >= len(expected) or i >= len(actual) or expected[i] != actual[i]
+            if not differs:
+                continue
+            name = owner.get(i, "beyond the expected frame" if i >= len(expected) else "unmapped")
+            if out and out[-1].end == i and out[-1].field == name:
+                out[-1] = ByteDiff(out[-1].start, i + 1, name)
+            else:
+                out.append(ByteDiff(i, i + 1, name))
+        return tuple(out)
 
     def frame_difference(self, expected: bytes, actual: bytes | None) -> str:
         """Where two frames first differ, named by the field that owns the byte in the expected frame."""

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from typing import Iterable, Iterator
+
 from .adapter_api import Rejected, Unsupported
 from .evaluate import Answer, Request
+from .session import Job
 
 
 def ask(adapter, suite: str, case: dict, request: Request) -> Answer:
@@ -21,3 +24,26 @@ def ask(adapter, suite: str, case: dict, request: Request) -> Answer:
         return Answer("unsupported", reason=str(exc))
     except Exception as exc:  # an adapter bug must never pass a case
         return Answer("adapter-error", reason=f"{type(exc).__name__}: {exc}")
+
+
+class LibrarySession:
+    """A session over an in-process adapter object; requests run one after the other."""
+
+    def __init__(self, adapter, name: str):
+        self.adapter, self.name = adapter, name
+
+    def hello(self) -> dict:
+        return self.adapter.hello()
+
+    def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
+        for job in jobs:
+            yield job, ask(self.adapter, job.suite, job.case, job.request)
+
+    @property
+    def stderr(self) -> str:
+        return ""
+
+    def close(self) -> None:
+        close = getattr(self.adapter, "close", None)
+        if callable(close):
+            close()

@@ -83,7 +83,7 @@ def boundaries(spans, length: int):
     for s in spans:
         if s.end < length:
             cuts.setdefault(s.end, f"after-{s.path}")
-    cuts[length - 1] = "inside-footer.crc"
+    cuts[length - 1] = "inside-footer.crc16"
     return sorted(cuts.items())
 
 
