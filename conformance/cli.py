@@ -146,13 +146,14 @@ def command_run(args) -> int:
 
 
 def write_reports(result: RunResult, args) -> None:
+    targets = {fmt: getattr(args, fmt) for fmt in REPORTS if getattr(args, fmt)}
+    if not targets:
+        return
     from .render import RENDERERS
 
-    for fmt in REPORTS:
-        target = getattr(args, fmt)
-        if target:
-            Path(target).parent.mkdir(parents=True, exist_ok=True)
-            Path(target).write_text(RENDERERS[fmt](result), encoding="utf-8")
+    for fmt, target in targets.items():
+        Path(target).parent.mkdir(parents=True, exist_ok=True)
+        Path(target).write_text(RENDERERS[fmt](result), encoding="utf-8")
 
 
 def command_report(args) -> int:
