@@ -33,6 +33,8 @@ from __future__ import annotations
 
 import struct
 from importlib.metadata import version
+from math import isfinite
+from operator import attrgetter
 
 import imcpy
 
@@ -72,14 +74,18 @@ class _Converter:
     def __init__(self, adapter: ImcpyAdapter, mdef: MessageDef):
         proto = imcpy.Factory.produce(mdef.abbrev)
         self.abbrev, self.cls = mdef.abbrev, type(proto)
-        self.put, self.get = {}, []
+        self.put, attrs, self.names, self.getters = {}, [], [], []
         for f in mdef.fields:
             attr = f.abbrev if hasattr(proto, f.abbrev) else f.abbrev.lower()
             if not hasattr(proto, attr):
                 raise AttributeError(f"imcpy's {mdef.abbrev} has no attribute {f.abbrev!r} nor {attr!r}")
             where = f"{mdef.abbrev}.{f.abbrev}"
             self.put[f.abbrev] = adapter._putter(f, attr, where)
-            self.get.append((f.abbrev, attr, adapter._getter(f)))
+            attrs.append(attr)
+            self.names.append(f.abbrev)
+            self.getters.append(adapter._getter(f))
+        # one C-level call fetches every attribute (attrgetter of one name returns the bare value)
+        self.fetch = attrgetter(*attrs) if len(attrs) > 1 else (lambda m, a=attrs: tuple(getattr(m, x) for x in a))
 
     def fill(self, msg, fields) -> None:
         if not isinstance(fields, dict):
@@ -91,7 +97,7 @@ class _Converter:
             put(msg, value)
 
     def fields(self, msg) -> dict:
-        return {name: get(getattr(msg, attr)) for name, attr, get in self.get}
+        return {name: get(value) if get else value for name, get, value in zip(self.names, self.getters, self.fetch(msg))}
 
 
 class ImcpyAdapter:
@@ -104,7 +110,9 @@ class ImcpyAdapter:
         self._header_put = [
             (h.abbrev, defs.header_defaults[h.abbrev], self._putter(h, h.abbrev, f"header.{h.abbrev}")) for h in header
         ]
-        self._header_get = [(h.abbrev, self._getter(h)) for h in header]
+        self._header_names = [h.abbrev for h in header]
+        self._header_getters = [self._getter(h) for h in header]
+        self._header_fetch = attrgetter(*self._header_names)
         self._by_abbrev = {m.abbrev: _Converter(self, m) for m in defs.messages}
         self._by_class = {c.cls: c for c in self._by_abbrev.values()}
 
@@ -134,7 +142,8 @@ class ImcpyAdapter:
         except RuntimeError as exc:
             raise Rejected(str(exc), rule=_dune_rule(str(exc))) from exc
         out = self._message_out(msg)
-        header = {name: get(getattr(msg, name)) for name, get in self._header_get}
+        header = {name: get(value) if get else value
+                  for name, get, value in zip(self._header_names, self._header_getters, self._header_fetch(msg))}
         return {"abbrev": out["abbrev"], "header": header, "fields": out["fields"]}
 
     # ------------------------------------------------------------ decoded form -> imcpy
@@ -216,14 +225,16 @@ class ImcpyAdapter:
         return None if msg is None else self._message_out(msg)
 
     def _getter(self, f: FieldDef):
-        """A function turning the value of an imcpy attribute into the field's decoded form."""
+        """A function turning the value of an imcpy attribute into the field's decoded form (None: as is)."""
         if f.is_float:
             width, bits, floats = f.size, _BITS[f.size], _FLOATS[f.size]
-            return lambda x: float_from_bits(bits.unpack(floats.pack(x))[0], width)
+            # Finite values are returned as imcpy gives them (exact at the field's width, which is how the
+            # runner compares); NaN and infinities take their canonical string form.
+            return lambda x: x if isfinite(x) else float_from_bits(bits.unpack(floats.pack(x))[0], width)
         if f.is_int:
-            return int  # enum getters return pybind11 enums (bitfields are plain ints)
+            return int if f.enum_kind == "enum" else None  # enum getters return pybind11 enums; others are ints
         return {
-            "plaintext": str,  # already a str (lossy, see the module docstring); str() returns it as is
+            "plaintext": None,  # already a str (lossy, see the module docstring)
             "rawdata": bytes.hex,
             "message": self._inline_out,
             "message-list": lambda items: [self._inline_out(m) for m in items],  # null elements read as None

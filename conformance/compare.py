@@ -31,11 +31,15 @@ _MISSING = object()
 
 
 class Comparator:
-    """Compares decoded messages against one set of definitions."""
+    """Compares decoded messages against one set of definitions; per-message checkers are built once."""
 
     def __init__(self, defs: Definitions):
         self.defs = defs
-        self._header = {k: FieldDef(abbrev=k, name=k, type=t, clause="imc-wire#frame-layout") for k, t in HEADER_TYPES.items()}
+        self._checkers: dict[str, list] = {}
+        header = MessageDef(id=-1, abbrev="header", name="header", clause="imc-wire#frame-layout", min_payload=0,
+                            fields=tuple(FieldDef(abbrev=k, name=k, type=t, clause="imc-wire#frame-layout")
+                                         for k, t in HEADER_TYPES.items()))
+        self._header = self._build(header)
 
     def messages(self, expected: dict, actual, *, nan_payload: bool = False) -> list[Difference]:
         out: list[Difference] = []
@@ -47,44 +51,73 @@ class Comparator:
         if not isinstance(header, dict):
             out.append(Difference("header", expected.get("header"), header, "not an object"))
         else:
-            for name, f in self._header.items():
-                self._value(f, expected["header"][name], header.get(name, _MISSING), f"header.{name}", nan_payload, out)
-        self._fields(self.defs[expected["abbrev"]], expected["fields"], actual.get("fields"), expected["abbrev"], nan_payload, out)
+            self._check(self._header, expected["header"], header, "header", nan_payload, out, extra_ok=True)
+        self._fields(expected["abbrev"], expected["fields"], actual.get("fields"), expected["abbrev"], nan_payload, out)
         return out
 
-    def _fields(self, mdef: MessageDef, expected: dict, actual, path: str, nan_payload: bool, out: list) -> None:
+    def _fields(self, abbrev: str, expected: dict, actual, path: str, nan_payload: bool, out: list) -> None:
         if not isinstance(actual, dict):
             out.append(Difference(f"{path}.fields", "an object", actual))
             return
-        for f in mdef.fields:
-            self._value(f, expected[f.abbrev], actual.get(f.abbrev, _MISSING), f"{path}.{f.abbrev}", nan_payload, out)
-        for extra in sorted(set(actual) - {f.abbrev for f in mdef.fields}):
-            out.append(Difference(f"{path}.{extra}", _MISSING, actual[extra], "not a field of " + mdef.abbrev))
+        checkers = self._checkers.get(abbrev)
+        if checkers is None:
+            checkers = self._checkers[abbrev] = self._build(self.defs[abbrev])
+        self._check(checkers, expected, actual, path, nan_payload, out)
 
-    def _value(self, f: FieldDef, expected, actual, path: str, nan_payload: bool, out: list) -> None:
-        if actual is _MISSING:
-            out.append(Difference(path, expected, None, "missing"))
-        elif f.is_float:
-            if not _same_float(expected, actual, f.size, nan_payload):
-                out.append(Difference(path, expected, actual, f"{f.type}"))
-        elif f.is_int:
-            if isinstance(actual, bool) or actual != expected or not isinstance(actual, int):
-                out.append(Difference(path, expected, actual, f.type))
-        elif f.type in ("plaintext", "rawdata"):
-            convert = text_bytes if f.type == "plaintext" else raw_bytes
-            try:
-                same = convert(expected) == convert(actual)
-            except (ValueError, TypeError):
-                same = False
-            if not same:
-                out.append(Difference(path, expected, actual, f.type))
-        elif f.type == "message":
-            self._inline(expected, actual, path, nan_payload, out)
-        elif not isinstance(actual, list) or len(actual) != len(expected):
-            out.append(Difference(path, f"{len(expected)} elements", actual if not isinstance(actual, list) else f"{len(actual)} elements"))
-        else:
-            for i, (e, a) in enumerate(zip(expected, actual)):
-                self._inline(e, a, f"{path}[{i}]", nan_payload, out)
+    @staticmethod
+    def _check(checkers, expected: dict, actual: dict, path: str, nan_payload: bool, out: list, extra_ok=False) -> None:
+        for name, check in checkers:
+            value = actual.get(name, _MISSING)
+            if value is _MISSING:
+                out.append(Difference(f"{path}.{name}", expected[name], None, "missing"))
+            else:
+                check(expected[name], value, f"{path}.{name}", nan_payload, out)
+        if not extra_ok and len(actual) != len(checkers):
+            for extra in sorted(set(actual) - {name for name, _ in checkers}):
+                out.append(Difference(f"{path}.{extra}", _MISSING, actual[extra], "not a field of " + path))
+
+    def _build(self, mdef: MessageDef) -> list:
+        """(field name, checker) per field; a checker appends Differences to ``out``."""
+        return [(f.abbrev, self._checker(f)) for f in mdef.fields]
+
+    def _checker(self, f: FieldDef):
+        if f.is_float:
+            width, type_ = f.size, f.type
+
+            def check_float(e, a, path, nan_payload, out):
+                if not _same_float(e, a, width, nan_payload):
+                    out.append(Difference(path, e, a, type_))
+            return check_float
+        if f.is_int:
+            type_ = f.type
+
+            def check_int(e, a, path, nan_payload, out):
+                if a != e or type(a) is not int:
+                    out.append(Difference(path, e, a, type_))
+            return check_int
+        if f.type in ("plaintext", "rawdata"):
+            convert, type_ = (text_bytes if f.type == "plaintext" else raw_bytes), f.type
+
+            def check_bytes(e, a, path, nan_payload, out):
+                if a == e:
+                    return
+                try:
+                    same = convert(e) == convert(a)
+                except (ValueError, TypeError):
+                    same = False
+                if not same:
+                    out.append(Difference(path, e, a, type_))
+            return check_bytes
+        if f.type == "message":
+            return self._inline
+
+        def check_list(e, a, path, nan_payload, out):
+            if not isinstance(a, list) or len(a) != len(e):
+                out.append(Difference(path, f"{len(e)} elements", a if not isinstance(a, list) else f"{len(a)} elements"))
+                return
+            for i, (x, y) in enumerate(zip(e, a)):
+                self._inline(x, y, f"{path}[{i}]", nan_payload, out)
+        return check_list
 
     def _inline(self, expected, actual, path: str, nan_payload: bool, out: list) -> None:
         if expected is None or actual is None:
@@ -94,10 +127,12 @@ class Comparator:
         if not isinstance(actual, dict) or actual.get("abbrev") != expected["abbrev"]:
             out.append(Difference(path, expected["abbrev"], actual.get("abbrev") if isinstance(actual, dict) else actual, "message type"))
             return
-        self._fields(self.defs[expected["abbrev"]], expected["fields"], actual.get("fields"), f"{path}.{expected['abbrev']}", nan_payload, out)
+        self._fields(expected["abbrev"], expected["fields"], actual.get("fields"), f"{path}.{expected['abbrev']}", nan_payload, out)
 
 
 def _same_float(expected, actual, width: int, nan_payload: bool) -> bool:
+    if type(expected) is float and type(actual) is float and expected == actual and expected != 0.0:
+        return True  # the common case: equal finite non-zero values (zeros still need their sign compared)
     try:
         a = float_to_bits(actual, width)
     except ValueError:

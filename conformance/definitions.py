@@ -43,24 +43,24 @@ class FieldDef:
     message_types: tuple[str, ...] = ()
     range_source: str | None = None  # clause of min/max when it differs from the field's
 
-    @property
+    @cached_property
     def is_scalar(self) -> bool:
         return self.type in SCALAR_FORMATS
 
-    @property
+    @cached_property
     def is_float(self) -> bool:
         return self.type in ("fp32_t", "fp64_t")
 
-    @property
+    @cached_property
     def is_int(self) -> bool:
         return self.is_scalar and not self.is_float
 
-    @property
+    @cached_property
     def size(self) -> int:
         """Bytes of a scalar field."""
         return {"b": 1, "B": 1, "h": 2, "H": 2, "i": 4, "I": 4, "q": 8, "f": 4, "d": 8}[SCALAR_FORMATS[self.type]]
 
-    @property
+    @cached_property
     def int_bounds(self) -> tuple[int, int]:
         bits = 8 * self.size
         if self.type.startswith("u"):

@@ -1,0 +1,110 @@
+"""Benchmark: cases per second through the runner with imcpy, in-process and through a subprocess.
+
+``python -m imc_conformance.benchmark [--repeat 5]`` prints medians over the repeats, all measured in
+one run (these machines are noisy: compare the ratios, not absolute numbers across runs):
+
+- library: the whole IMC corpus through ``run_cases`` with the imcpy library adapter (wall time
+  excludes interpreter start and corpus loading, which are reported apart);
+- imcpy alone: the same encode/decode calls made on imcpy directly, no adapter, no judging;
+- subprocess: the whole corpus through the pipelined subprocess adapter and the imcpy shim;
+- one process per case: the slow anchor, a fresh shim process for each case of a sample.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+from .corpus_data import load_cases, vector_files
+from .definitions import load_definitions
+from .evaluate import expectation, plan
+from .runner import run_cases
+
+EDITION = "imc-5.4.30"
+TARGETS = {"corpus wall (library)": "< 2 s", "library cases/s": ">= 20,000", "subprocess cases/s": ">= 5,000"}
+
+
+def imcpy_alone(cases: list[dict], emits: set[str]) -> float:
+    """Seconds for the bare imcpy calls the corpus needs (decode via Packet.deserialize, encode via serialize)."""
+    import imcpy
+
+    frames, encodable = [], []
+    for case in cases:
+        for request in plan(case, EDITION, emits):
+            if request.op in ("decode", "roundtrip"):
+                frames.append(bytes.fromhex(case["frames"][request.byte_order]))
+            if request.op in ("encode", "roundtrip") and case["expect"] == "valid":
+                encodable.append(case["frames"]["le"])
+    messages = [imcpy.Packet.deserialize(bytes.fromhex(f)) for f in encodable]
+    start = time.perf_counter()
+    for frame in frames:
+        try:
+            imcpy.Packet.deserialize(frame)
+        except RuntimeError:
+            pass
+    for message in messages:
+        message.serialize()
+    return time.perf_counter() - start
+
+
+def timed(fn) -> float:
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m imc_conformance.benchmark", description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
+    parser.add_argument("--skip-subprocess", action="store_true")
+    args = parser.parse_args(argv)
+
+    from .adapters.imcpy_adapter import adapter
+    from .cli import shim_argv
+    from .library import LibrarySession
+
+    load = timed(lambda: (vector_files.cache_clear(), load_cases()))
+    defs, cases = load_definitions(), load_cases()
+    cases = [c for c in cases if expectation(c, EDITION) is not None]
+    library = LibrarySession(adapter(), "imcpy")
+    rows: dict[str, list[float]] = {"library": [], "imcpy alone": [], "subprocess": [], "process per case": []}
+    for _ in range(args.repeat):
+        rows["library"].append(timed(lambda: run_cases(library, cases, defs=defs, edition=EDITION, adapter="imcpy")))
+        rows["imcpy alone"].append(imcpy_alone(cases, {"le"}))
+        if not args.skip_subprocess:
+            from .subprocess_session import SubprocessSession
+
+            session = SubprocessSession(shim_argv("imcpy-shim"), name="imcpy-shim")
+            try:
+                rows["subprocess"].append(timed(lambda: run_cases(session, cases, defs=defs, edition=EDITION, adapter="imcpy-shim")))
+            finally:
+                session.close()
+            sample = cases[:: max(1, len(cases) // args.per_case_sample)][: args.per_case_sample]
+
+            def one_process_each():
+                for case in sample:
+                    s = SubprocessSession(shim_argv("imcpy-shim"), name="imcpy-shim")
+                    try:
+                        run_cases(s, [case], defs=defs, edition=EDITION, adapter="imcpy-shim")
+                    finally:
+                        s.close()
+            rows["process per case"].append(timed(one_process_each) * len(cases) / len(sample))
+    n = len(cases)
+    med = {k: statistics.median(v) for k, v in rows.items() if v}
+    print(f"corpus: {n} cases ({EDITION}); loading the vector files: {load:.3f} s; medians of {args.repeat} runs")
+    for name, seconds in med.items():
+        print(f"  {name:18s} {seconds:7.3f} s  {n / seconds:10,.0f} cases/s")
+    overhead = (med["library"] - med["imcpy alone"]) / n * 1e6
+    print(f"runner overhead over imcpy's own encode/decode: {overhead:.1f} µs per case "
+          f"({med['library'] / med['imcpy alone']:.1f}x imcpy alone)")
+    if "subprocess" in med:
+        print(f"subprocess vs library: {med['subprocess'] / med['library']:.1f}x slower; "
+              f"pipelined subprocess vs one process per case: {med['process per case'] / med['subprocess']:.0f}x faster")
+    print("targets: " + "; ".join(f"{k} {v}" for k, v in TARGETS.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
