@@ -138,6 +138,9 @@ class Judge:
         check = request.check
         permitted = {o["outcome"]: o for o in case["outcomes"]}
         if answer.kind == "rejected":
+            if "reject" in permitted and answer.rule is not None:
+                return CheckResult(check, Verdict.NON_STRICT, f"rejected naming rule {answer.rule!r}, which this case "
+                                   f"does not break: {answer.reason}", "reject")
             if "reject" in permitted:
                 return CheckResult(check, Verdict.IMPL_DEFINED, f"rejected: {answer.reason}", "reject")
             return CheckResult(check, Verdict.FAIL, f"rejected, which this case does not permit: {answer.reason}")

@@ -13,7 +13,7 @@ from .. import codec
 from ..codec import HEADER_SIZE
 from . import samples
 from .records import MessageCases
-from .surgery import flip, payload_of, read_u16, reframe, swapped_crc, u16
+from .surgery import flip, payload_of, read_u16, reframe, swapped_crc, u16, with_crc
 from .valid import first_variable_field, max_fill
 
 UNUSED_ID = 999  # no message in IMC.xml has this id
@@ -33,10 +33,10 @@ def add_invalid(mc: MessageCases) -> None:
                    tags=["invalid", f"rule:{rule}", f"byte-order:{order}"], frames={order: broken}, rule=rule,
                    message=message, **extra)
 
-        # sync
-        invalid("sync/first-byte", "sync", flip(frame, 0, 0x01))
-        invalid("sync/zero", "sync", b"\x00\x00" + frame[2:])
-        invalid("sync/first-byte-repeated", "sync", frame[:1] * 2 + frame[2:],
+        # sync (the CRC recomputed over the edited bytes, so that sync is the only rule broken)
+        invalid("sync/first-byte", "sync", with_crc(flip(frame, 0, 0x01), order))
+        invalid("sync/zero", "sync", with_crc(b"\x00\x00" + frame[2:], order))
+        invalid("sync/first-byte-repeated", "sync", with_crc(frame[:1] * 2 + frame[2:], order),
                 comment="Both sync bytes equal the first one (54 54 or FE FE): neither order.")
         # CRC: flipped in every region, and stored in the wrong byte order
         for region, offset in (("header-timestamp", 10), ("header-src", 14), ("header-dst", 17)):
@@ -55,11 +55,12 @@ def add_invalid(mc: MessageCases) -> None:
             invalid(f"truncated/{name}", rule, frame[:cut])
         # size field
         size = read_u16(frame, order, 4)
+        # a size field larger than the data; the CRC is over the bytes present, so only the size is wrong
         for name, delta in (("plus-1", 1), ("plus-1000", 1000)):
             if size + delta <= defs.max_payload:
-                invalid(f"size-exceeds-data/{name}", "size-exceeds-data", frame[:4] + u16(order, size + delta) + frame[6:])
-        invalid("size-limit/claimed-65514", "size-limit", frame[:4] + u16(order, defs.max_payload + 1) + frame[6:])
-        invalid("size-limit/claimed-65535", "size-limit", frame[:4] + u16(order, 0xFFFF) + frame[6:])
+                invalid(f"size-exceeds-data/{name}", "size-exceeds-data", reframe(frame, order, size=size + delta))
+        invalid("size-limit/claimed-65514", "size-limit", reframe(frame, order, size=defs.max_payload + 1))
+        invalid("size-limit/claimed-65535", "size-limit", reframe(frame, order, size=0xFFFF))
         add_oversize(mc, invalid, order)
         # message id
         invalid(f"unknown-id/{UNUSED_ID}", "unknown-id", reframe(frame, order, mgid=UNUSED_ID))

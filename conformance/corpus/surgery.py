@@ -33,6 +33,11 @@ def reframe(frame: bytes, order: str, *, payload: bytes | None = None, mgid: int
     return body + u16(order, crc16(body))
 
 
+def with_crc(frame: bytes, order: str) -> bytes:
+    """The frame with its footer recomputed over everything before it, stored in ``order``."""
+    return frame[:-2] + u16(order, crc16(frame[:-2]))
+
+
 def flip(frame: bytes, offset: int, mask: int = 0x01) -> bytes:
     out = bytearray(frame)
     out[offset] ^= mask

@@ -1,0 +1,103 @@
+"""A self-contained HTML compliance report: inline CSS, no external resources, no script.
+
+The template autoescapes everything; implementation text is never marked safe. Failing checks that kept
+both frames show them side by side as hex dumps, the differing bytes marked and named by field.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+from jinja2 import Environment, FileSystemLoader, StrictUndefined
+
+from ..evaluate import ByteDiff, Verdict
+from ..results import CaseResult, RunResult
+from .common import attention, clean, overall, verdict_columns
+
+TEMPLATES = Path(__file__).resolve().parent / "templates"
+MAX_DETAILED = 200  # failing cases shown in full
+MAX_STDERR = 20_000  # characters of adapter stderr shown
+MAX_LEGEND = 40  # differing ranges listed per frame pair
+ROW = 16  # bytes per dump row
+FULL_DUMP_ROWS = 24  # longer frames show only the rows around differences
+TONE = {
+    Verdict.PASS: "ok", Verdict.FAIL: "bad", Verdict.CRASH: "bad", Verdict.TIMEOUT: "bad", Verdict.ADAPTER_ERROR: "bad",
+    Verdict.NON_STRICT: "warn", Verdict.WAIVER_STALE: "warn", Verdict.IMPL_DEFINED: "info",
+    Verdict.UNSUPPORTED: "mute", Verdict.WAIVED: "mute",
+}
+
+
+@cache
+def environment() -> Environment:
+    env = Environment(loader=FileSystemLoader(TEMPLATES), autoescape=True, trim_blocks=True, lstrip_blocks=True,
+                      undefined=StrictUndefined)
+    env.filters["text"] = clean
+    return env
+
+
+def render_html(result: RunResult) -> str:
+    failing = attention(result)
+    shown = [case_view(c, n) for n, c in enumerate(failing[:MAX_DETAILED])]
+    first = {}
+    for view in shown:
+        first.setdefault(view["case"].message, view["anchor"])
+    stderr = clean(result.stderr)
+    return environment().get_template("report.html.j2").render(
+        result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown,
+        failing_total=len(failing), first_failure=first, stderr=stderr[:MAX_STDERR],
+        stderr_cut=max(0, len(stderr) - MAX_STDERR))
+
+
+def case_view(case: CaseResult, index: int) -> dict:
+    """A failing case with its frame pairs; checks that produced the same pair share one dump."""
+    pairs: dict[tuple, list[str]] = {}
+    for k in case.checks:
+        if k.expected is not None:
+            pairs.setdefault((k.expected, k.actual, k.diffs), []).append(k.check)
+    return {"case": case, "anchor": f"case-{index + 1}",
+            "frames": [frame_pair(e, a, d, checks) for (e, a, d), checks in pairs.items()]}
+
+
+def frame_pair(expected: str, actual: str | None, diffs: tuple[ByteDiff, ...], checks: list[str]) -> dict:
+    exp = bytes.fromhex(expected)
+    act = None if actual is None else bytes.fromhex(actual)
+    owner = {i: n for n, d in enumerate(diffs) for i in range(d.start, d.end)}
+    rows = visible_rows(max(len(exp), len(act or b"")), {i // ROW for i in owner})
+    return {
+        "checks": checks,
+        "expected": {"size": len(exp), "rows": dump(exp, rows, owner, diffs)},
+        "actual": None if act is None else {"size": len(act), "rows": dump(act, rows, owner, diffs)},
+        "ranges": [{"n": n, "start": d.start, "end": d.end, "last": d.end - 1, "field": d.field}
+                   for n, d in enumerate(diffs[:MAX_LEGEND])],
+        "more_ranges": max(0, len(diffs) - MAX_LEGEND),
+    }
+
+
+def visible_rows(size: int, marked: set[int]) -> list[int]:
+    """Row numbers to show: all of a short frame; of a long one the first two, the last, and those near a difference."""
+    count = -(-size // ROW)
+    if count <= FULL_DUMP_ROWS:
+        return list(range(count))
+    keep = {0, 1, count - 1} | {r + d for r in marked for d in (-1, 0, 1)}
+    return sorted(r for r in keep if 0 <= r < count)
+
+
+def dump(data: bytes, rows: list[int], owner: dict[int, int], diffs: tuple[ByteDiff, ...]) -> list[dict]:
+    """Hex dump rows of ``data``: each a list of byte tokens, a marked token naming its differing range.
+
+    ``joined`` tells a marked token that continues the previous token's range, so one mark covers the run."""
+    out, previous = [], None
+    for r in rows:
+        if previous is not None and r != previous + 1:
+            out.append({"gap": True})
+        previous = r
+        tokens, last = [], None
+        for i in range(r * ROW, min(len(data), (r + 1) * ROW)):
+            n = owner.get(i)
+            sep = "" if i == r * ROW else "  " if i % ROW == ROW // 2 else " "
+            tokens.append({"hex": f"{data[i]:02x}", "sep": sep, "range": n, "joined": n is not None and n == last,
+                           "title": None if n is None else f"{diffs[n].field}, byte {i}"})
+            last = n
+        out.append({"gap": False, "offset": f"{r * ROW:04x}", "tokens": tokens})
+    return out

@@ -1,0 +1,11 @@
+"""The result as its versioned JSON document (``imc-conformance-result/1``, see ``vectors/schema/result.schema.json``)."""
+
+from __future__ import annotations
+
+import json
+
+from ..results import RunResult
+
+
+def render_json(result: RunResult) -> str:
+    return json.dumps(result.to_dict(), indent=1) + "\n"

@@ -1,0 +1,86 @@
+"""JUnit XML for CI test views: one testsuite per message, one testcase per case.
+
+FAIL and WAIVER_STALE (and NON_STRICT under --strict) are failures; CRASH, TIMEOUT and ADAPTER_ERROR
+are errors; UNSUPPORTED is skipped; WAIVED, IMPL_DEFINED and a lenient NON_STRICT pass with a note in
+``<system-out>``. Implementation text is stripped of what XML 1.0 cannot carry; ElementTree escapes the rest.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections import Counter
+
+from ..evaluate import Verdict
+from ..results import CaseResult, RunResult
+from .common import clean
+
+ERRORS = {Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR}
+MESSAGE_LIMIT = 500  # characters of detail in a failure's message attribute
+
+
+def outcome(case: CaseResult, strict: bool) -> str | None:
+    """``failure``, ``error``, ``skipped``, ``note`` (passed, with system-out) or None (plain pass)."""
+    v = case.verdict
+    if v in (Verdict.FAIL, Verdict.WAIVER_STALE) or (v is Verdict.NON_STRICT and strict):
+        return "failure"
+    if v in ERRORS:
+        return "error"
+    if v is Verdict.UNSUPPORTED:
+        return "skipped"
+    return None if v is Verdict.PASS else "note"
+
+
+def body(case: CaseResult) -> str:
+    """The full account of a case: detail, clause, rule, errata, waiver, and every check."""
+    lines = [f"{case.verdict.value}: {case.detail}", f"clause: {case.clause}"]
+    if case.rule:
+        lines.append(f"rule: {case.rule}")
+    if case.errata:
+        lines.append(f"errata: {', '.join(case.errata)}")
+    if case.waiver:
+        lines.append(f"waiver: {case.waiver}")
+    for k in case.checks:
+        lines.append(f"{k.check} {k.verdict.value}: {k.detail}")
+        if k.expected:
+            lines += [f"  expected {k.expected}", f"  actual   {k.actual or '(none)'}"]
+        lines += [f"  bytes {d.start}-{d.end - 1} = {d.field}" for d in k.diffs]
+    return clean("\n".join(lines))
+
+
+def testcase(case: CaseResult, suite: str, message: str, strict: bool) -> tuple[ET.Element, str | None]:
+    el = ET.Element("testcase", classname=f"{suite}.{message}", name=clean(case.id), time="0")
+    kind = outcome(case, strict)
+    if kind == "note":
+        ET.SubElement(el, "system-out").text = body(case)
+    elif kind == "skipped":
+        ET.SubElement(el, "skipped", message=clean(case.detail)[:MESSAGE_LIMIT])
+    elif kind:
+        sub = ET.SubElement(el, kind, message=clean(case.detail)[:MESSAGE_LIMIT], type=case.verdict.value)
+        sub.text = body(case)
+    return el, kind
+
+
+def render_junit(result: RunResult) -> str:
+    props = {"suite": result.suite, "edition": result.edition, "implementation": result.implementation,
+             "adapter": result.adapter, "strict": str(result.strict).lower()}
+    suites = []
+    for message in result.messages:
+        cases = [testcase(c, result.suite, message.name, result.strict) for c in message.cases]
+        kinds = Counter(kind for _, kind in cases)
+        counts = {"tests": len(cases), "failures": kinds["failure"], "errors": kinds["error"], "skipped": kinds["skipped"]}
+        suite = ET.Element("testsuite", name=f"{result.suite}/{message.name}", **{k: str(n) for k, n in counts.items()},
+                           time="0", timestamp=result.started)
+        properties = ET.SubElement(suite, "properties")
+        for name, value in props.items():
+            ET.SubElement(properties, "property", name=name, value=clean(value))
+        suite.extend(el for el, _ in cases)
+        suites.append((suite, counts))
+    totals = {k: str(sum(counts[k] for _, counts in suites)) for k in ("tests", "failures", "errors", "skipped")}
+    root = ET.Element("testsuites", name=clean(f"imc-conformance {result.edition}: {result.implementation}"), **totals,
+                      time=f"{result.duration:.3f}")
+    root.extend(suite for suite, _ in suites)
+    if result.stderr:
+        holder = root[0] if len(root) else root
+        ET.SubElement(holder, "system-err").text = clean(result.stderr)
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

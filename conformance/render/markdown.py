@@ -1,0 +1,62 @@
+"""GitHub-flavoured Markdown for pull-request comments and ``$GITHUB_STEP_SUMMARY``."""
+
+from __future__ import annotations
+
+import re
+
+from ..evaluate import Verdict
+from ..results import RunResult
+from .common import attention, clean, overall, verdict_columns
+
+EMOJI = {
+    Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",
+    Verdict.UNSUPPORTED: "⏭️", Verdict.CRASH: "💥", Verdict.TIMEOUT: "⏱️", Verdict.ADAPTER_ERROR: "🛠️",
+    Verdict.WAIVED: "🙈", Verdict.WAIVER_STALE: "🧹",
+}
+OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️"}
+MAX_CASES = 50
+MAX_DETAIL = 300
+
+_ENTITIES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "&#124;", "`": "&#96;"}
+_SPECIAL = re.compile(r"[&<>|`]|[\\*_\[\]~]")
+
+
+def cell(text: str, limit: int | None = None) -> str:
+    """``text`` safe inside a table cell: one line, no table breaks, no HTML, no Markdown emphasis or links."""
+    text = " ".join(clean(text).split())
+    if limit and len(text) > limit:
+        text = text[:limit - 1] + "…"
+    return _SPECIAL.sub(lambda m: _ENTITIES.get(m[0], "\\" + m[0]), text)
+
+
+def render_markdown(result: RunResult) -> str:
+    verdict = overall(result)
+    columns = verdict_columns(result)
+    total = len(result.cases)
+    lines = [
+        f"## {OVERALL[verdict]} IMC conformance: {verdict} — {cell(result.implementation)} · {cell(result.edition)}",
+        "",
+        f"**{total} cases** in {len(result.messages)} messages: "
+        + ", ".join(f"{EMOJI[Verdict(v)]} {n} {v}" for v, n in result.summary.items())
+        + f" · adapter {cell(result.adapter)} · {result.duration:.1f} s · {cell(result.started)}"
+        + (" · strict" if result.strict else ""),
+        "",
+        "| Message | Verdict | " + " | ".join(v.value for v in columns) + " |",
+        "|---|---|" + "--:|" * len(columns),
+    ]
+    for m in result.messages:
+        counts = m.counts
+        lines.append(f"| {cell(m.name)} ({m.id}) | {OVERALL.get(m.verdict, '')} {m.verdict} | "
+                     + " | ".join(str(counts[v] or "") for v in columns) + " |")
+    if result.notes:
+        lines += [""] + [f"- {cell(note)}" for note in result.notes]
+    failing = attention(result)
+    if failing:
+        lines += ["", f"<details><summary>{len(failing)} failing or non-strict cases</summary>", "",
+                  "| Case | Verdict | Detail | Errata |", "|---|---|---|---|"]
+        lines += [f"| <code>{cell(c.id)}</code> | {EMOJI[c.verdict]} {c.verdict.value} | {cell(c.detail, MAX_DETAIL)} | "
+                  f"{cell(', '.join(c.errata))} |" for c in failing[:MAX_CASES]]
+        if len(failing) > MAX_CASES:
+            lines += ["", f"and {len(failing) - MAX_CASES} more (see the full report)."]
+        lines += ["", "</details>"]
+    return "\n".join(lines) + "\n"
