@@ -63,7 +63,8 @@ def open_session(args):
         from .subprocess_session import SubprocessSession
 
         argv = shlex.split(args.adapter_cmd) if args.adapter_cmd else shim_argv(args.adapter)
-        return SubprocessSession(argv, name=args.adapter_cmd or args.adapter, timeout=args.timeout)
+        return SubprocessSession(argv, name=args.adapter_cmd or args.adapter, timeout=args.timeout,
+                                 hello_timeout=max(30.0, args.timeout))  # start-up (a JVM, class generation) takes longer
     return LibrarySession(load_library_adapter(args.adapter), args.adapter)
 
 
@@ -121,7 +122,7 @@ def command_run(args) -> int:
             waivers, notes = load_waivers(Path(args.waivers), {c["id"] for c in everything}, dt.date.today())
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
-    console = Console(stderr=False, highlight=False)
+    console = terminal()
     session = open_session(args)
     try:
         with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
@@ -157,17 +158,22 @@ def write_reports(result: RunResult, args) -> None:
 
 
 def command_report(args) -> int:
-    from rich.console import Console
-
     from .render_terminal import print_result
 
     try:
         result = RunResult.from_dict(json.loads(Path(args.result).read_text(encoding="utf-8")))
     except (OSError, ValueError, KeyError) as exc:
         raise UsageError(f"cannot read result {args.result}: {exc}") from exc
-    print_result(result, Console(highlight=False))
+    print_result(result, terminal())
     write_reports(result, args)
     return result.exit_code()
+
+
+def terminal():
+    """A rich console; CI logs (not a terminal) get a wide table instead of rich's 80 columns."""
+    from rich.console import Console
+
+    return Console(highlight=False, width=None if sys.stdout.isatty() else 160)
 
 
 def add_selection(parser) -> None:

@@ -1,0 +1,449 @@
+"""The subprocess adapter: an implementation as a separate program speaking JSON lines.
+
+The runner starts the program (an argv list, never a shell) and writes one JSON object per line on
+its stdin; the program answers each with one line on its stdout, matched by ``id``, in any order:
+
+* ``{"id": 1, "op": "hello"}`` -> ``{"id": 1, "ok": true, "implementation": "...", "suites": ["imc"],
+  "byte_orders": ["le", "be"]}`` (``byte_orders``: the orders the implementation emits);
+* ``{"id": 2, "op": "encode", "suite": "imc", "message": {...}, "byte_order": "le"}`` ->
+  ``{"id": 2, "ok": true, "frame": "<hex>"}``;
+* ``{"id": 3, "op": "decode", "suite": "imc", "frame": "<hex>"}`` -> ``{"id": 3, "ok": true, "message": {...}}``.
+
+A refusal is ``{"id": N, "ok": false, "error": "invalid CRC", "rule": "crc"}`` (``rule`` optional).
+``"unsupported": true`` declares the capability absent. ``"ok": false, "internal": true`` says the
+adapter itself failed (a bug in the shim, not a refusal by the implementation): an adapter error.
+Messages are in the corpus's decoded form; a roundtrip check is a decode followed by an encode of the
+decoded message, two requests. Lines are strict JSON (no NaN/Infinity tokens); stderr is free text.
+
+The program has ``hello_timeout`` (default: ``timeout``) seconds to start and answer hello.
+Up to ``pipeline`` requests are in flight. A request's clock starts when it was sent or when the
+last answer arrived, whichever is later, so a sequential program gets ``timeout`` seconds for each
+request. When the program dies (stdout EOF), stops answering, writes a line that is not a JSON object
+with a known id, or a line longer than ``max_line``, it is restarted (and greeted again) and the
+requests that were in flight are replayed one at a time; then pipelining resumes. Such a failure is
+blamed (CRASH, ADAPTER_ERROR) on a request only when it happens while that request is replayed alone,
+so it lands on the request that causes it; a timeout lands on the oldest request in flight at once.
+After ``MAX_RESTARTS`` restarts in a row without an answer the remaining jobs are adapter errors.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import subprocess
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+from itertools import count
+from typing import Iterable, Iterator
+
+from .evaluate import Answer
+from .session import AdapterStartError, Job
+
+STDERR_KEEP = 64 * 1024
+MAX_RESTARTS = 20
+SNIPPET = 200
+
+
+def _snippet(raw: bytes | str) -> str:
+    text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else raw
+    text = text.rstrip("\r\n")
+    return text if len(text) <= SNIPPET else text[:SNIPPET] + "..."
+
+
+def _reject_constant(name: str):
+    raise ValueError(f"{name} is not JSON")
+
+
+def _parse(raw: bytes):
+    """The JSON value of a line (strict: NaN and Infinity are not JSON); raises ValueError."""
+    return json.loads(raw, parse_constant=_reject_constant)
+
+
+class _StderrTail:
+    """The last ``STDERR_KEEP`` bytes the program(s) wrote on stderr, fed by reader threads."""
+
+    def __init__(self):
+        self._data, self._lock = bytearray(), threading.Lock()
+        self.total = 0  # bytes ever added
+
+    def add(self, chunk: bytes) -> None:
+        with self._lock:
+            self._data += chunk
+            del self._data[:-STDERR_KEEP]
+            self.total += len(chunk)
+
+    def text(self, since: int = 0) -> str:
+        """What is kept of the bytes added after the first ``since``."""
+        with self._lock:
+            kept = self._data[len(self._data) - min(self.total - since, len(self._data)):]
+            return kept.decode("utf-8", "replace")
+
+
+class _Process:
+    """One run of the program: pipes, a thread each for stdin, stdout and stderr, and an event queue.
+
+    Events: ``("line", bytes)``, ``("oversize", first bytes)`` (stdout is no longer read after it),
+    ``("eof", b"")``.
+    """
+
+    def __init__(self, argv: list[str], cwd, env, max_line: int, tail: _StderrTail):
+        self.popen = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      cwd=cwd, env=env, shell=False)
+        self.events: queue.SimpleQueue = queue.SimpleQueue()
+        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._max_line = max_line
+        self.stderr_start = tail.total
+        self._stderr_reader = threading.Thread(target=self._read_stderr, args=(tail,), daemon=True)
+        for thread in (threading.Thread(target=self._write, daemon=True),
+                       threading.Thread(target=self._read_stdout, daemon=True), self._stderr_reader):
+            thread.start()
+
+    def send(self, request: dict) -> None:
+        self._outbox.put(json.dumps(request, separators=(",", ":")).encode() + b"\n")
+
+    def next_event(self, timeout: float):
+        """The next event, or None if there was none within ``timeout`` seconds."""
+        try:
+            return self.events.get(timeout=max(timeout, 0))
+        except queue.Empty:
+            return None
+
+    def exit_status(self, wait: float = 0.5) -> str:
+        try:
+            code = self.popen.wait(wait)
+        except subprocess.TimeoutExpired:
+            return "closed its stdout"
+        return f"exited with code {code}" if code >= 0 else f"was killed by signal {-code}"
+
+    def stop(self, *, kill: bool = False, grace: float = 2.0) -> None:
+        """Close stdin, then end the program: at once with ``kill``, else terminate, wait, kill."""
+        self._outbox.put(None)
+        if self.popen.poll() is None:
+            if kill:
+                self.popen.kill()
+            else:
+                try:
+                    self.popen.wait(min(grace, 0.5))  # closing stdin lets a well-behaved program exit
+                except subprocess.TimeoutExpired:
+                    self.popen.terminate()
+            try:
+                self.popen.wait(grace)
+            except subprocess.TimeoutExpired:
+                self.popen.kill()
+                self.popen.wait()
+        self._stderr_reader.join(grace)  # the stderr tail is complete once its reader has seen EOF
+
+    def _write(self) -> None:
+        stdin = self.popen.stdin
+        try:
+            while (line := self._outbox.get()) is not None:
+                stdin.write(line)
+                if self._outbox.empty():
+                    stdin.flush()
+        except OSError:
+            pass  # the program is gone; the stdout reader reports it
+        finally:
+            try:
+                stdin.close()
+            except OSError:
+                pass
+
+    def _read_stdout(self) -> None:
+        stdout, limit = self.popen.stdout, self._max_line
+        try:
+            while line := stdout.readline(limit + 1):
+                if len(line) > limit and not line.endswith(b"\n"):
+                    self.events.put(("oversize", line[:SNIPPET]))
+                    return
+                self.events.put(("line", line))
+            self.events.put(("eof", b""))
+        finally:
+            stdout.close()
+
+    def _read_stderr(self, tail: _StderrTail) -> None:
+        stderr = self.popen.stderr
+        try:
+            while chunk := stderr.read1(65536):
+                tail.add(chunk)
+        finally:
+            stderr.close()
+
+
+@dataclass
+class _Call:
+    """One protocol request made for a job (a roundtrip job makes two, one after the other)."""
+
+    job: Job
+    body: dict
+    then_encode: bool = False  # the decode half of a roundtrip
+    replayed: bool = False  # sent alone after a restart: a failure while it is in flight is its own
+    sent: float = 0.0
+
+
+def _first_call(job: Job) -> _Call:
+    """The first protocol request of a job."""
+    request, case = job.request, job.case
+    if request.op == "encode":
+        return _Call(job, {"op": "encode", "suite": job.suite, "message": case["message"],
+                           "byte_order": request.byte_order})
+    body = {"op": "decode", "suite": job.suite, "frame": case["frames"][request.byte_order]}
+    return _Call(job, body, then_encode=request.op == "roundtrip")
+
+
+def _answer(op: str, reply: dict) -> Answer:
+    """The Answer a well-formed reply stands for; an adapter error if the reply is malformed."""
+    error, rule, ok = reply.get("error", ""), reply.get("rule"), reply.get("ok")
+    if not isinstance(error, str):
+        return _malformed("'error' is not a string", reply)
+    if reply.get("unsupported") is True:
+        return Answer("unsupported", reason=error or "unsupported")
+    if ok is False and reply.get("internal") is True:
+        return Answer("adapter-error", reason=f"adapter failed: {_snippet(error)}")
+    if ok is False:
+        if rule is not None and not isinstance(rule, str):
+            return _malformed("'rule' is not a string", reply)
+        return Answer("rejected", reason=error, rule=rule)
+    if ok is not True:
+        return _malformed("no boolean 'ok'", reply)
+    if op == "decode":
+        message = reply.get("message")
+        return Answer("ok", message=message) if isinstance(message, dict) else _malformed("no 'message' object", reply)
+    try:
+        return Answer("ok", frame=bytes.fromhex(reply["frame"]))
+    except (KeyError, TypeError, ValueError):
+        return _malformed("'frame' is not hex", reply)
+
+
+def _malformed(what: str, reply: dict) -> Answer:
+    return Answer("adapter-error", reason=f"malformed answer ({what}): {_snippet(json.dumps(reply))}")
+
+
+class _Restart(Exception):
+    """The program must be restarted; ``blame`` (the call to fail with ``answer``) may be None."""
+
+    def __init__(self, why: str, blame: _Call | None = None, answer: Answer | None = None):
+        super().__init__(why)
+        self.why, self.blame, self.answer = why, blame, answer
+
+
+class SubprocessSession:
+    """A session over a program speaking the JSON-lines protocol (see the module docstring)."""
+
+    def __init__(self, argv: list[str], *, name: str, timeout: float = 5.0, cwd=None, env=None,
+                 max_line: int = 1_000_000, pipeline: int = 256, hello_timeout: float | None = None):
+        self.argv, self.name, self.timeout = list(argv), name, timeout
+        self.hello_timeout = timeout if hello_timeout is None else hello_timeout  # start-up may take longer
+        self.cwd, self.env, self.max_line, self.pipeline = cwd, env, max_line, max(1, pipeline)
+        self._tail = _StderrTail()
+        self._ids = count(1)
+        self._proc: _Process | None = None
+        self._info: dict | None = None
+
+    @property
+    def stderr(self) -> str:
+        return self._tail.text()
+
+    def hello(self) -> dict:
+        """Start the program if needed; its hello answer (implementation, suites, byte_orders)."""
+        if self._proc is None:
+            self._start()
+        return dict(self._info)
+
+    def close(self) -> None:
+        if self._proc is not None:
+            self._proc.stop()
+            self._proc = None
+
+    # ------------------------------------------------------------ start and greet
+
+    def _start(self) -> None:
+        try:
+            proc = _Process(self.argv, self.cwd, self.env, self.max_line, self._tail)
+        except OSError as exc:
+            raise AdapterStartError(f"cannot start adapter {self.argv}: {exc.strerror or exc}") from exc
+        try:
+            self._info = self._greet(proc)
+        except AdapterStartError:
+            proc.stop(kill=True)
+            raise
+        self._proc = proc
+
+    def _greet(self, proc: _Process) -> dict:
+        ident = next(self._ids)
+        proc.send({"id": ident, "op": "hello"})
+        event = proc.next_event(self.hello_timeout)
+        if event is None:
+            raise AdapterStartError(f"adapter did not answer hello within {self.hello_timeout:g} s")
+        kind, raw = event
+        if kind == "eof":
+            status = proc.exit_status()
+            proc.stop(kill=True)
+            tail = _snippet(self._tail.text(proc.stderr_start)[-SNIPPET:].strip())
+            raise AdapterStartError(f"adapter {status} before answering hello" + (f"; stderr: {tail}" if tail else ""))
+        if kind == "oversize":
+            raise AdapterStartError(f"adapter answered hello with a line over {self.max_line} bytes: {_snippet(raw)}")
+        try:
+            reply = _parse(raw)
+        except ValueError:
+            reply = None
+        if not isinstance(reply, dict):
+            raise AdapterStartError(f"adapter answered hello with something that is not a JSON object: {_snippet(raw)}")
+        return self._hello_info(ident, reply, raw)
+
+    @staticmethod
+    def _hello_info(ident: int, reply: dict, raw: bytes) -> dict:
+        if reply.get("id") != ident:
+            raise AdapterStartError(f"adapter answered hello with id {reply.get('id')!r}, expected {ident}")
+        if reply.get("ok") is not True:
+            raise AdapterStartError(f"adapter refused hello: {_snippet(str(reply.get('error', raw)))}")
+        info = {key: reply.get(key) for key in ("implementation", "suites", "byte_orders")}
+        lists_ok = all(isinstance(info[k], list) and all(isinstance(x, str) for x in info[k])
+                       for k in ("suites", "byte_orders"))
+        if not isinstance(info["implementation"], str) or not lists_ok or not set(info["byte_orders"]) <= {"le", "be"}:
+            raise AdapterStartError("adapter's hello answer needs 'implementation' (a string), 'suites' and "
+                                    f"'byte_orders' (lists of strings; orders 'le'/'be'): {_snippet(raw)}")
+        return info
+
+    # ------------------------------------------------------------ running jobs
+
+    def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
+        """Perform every job, pipelined, yielding ``(job, Answer)`` as answers arrive."""
+        state = _RunState(iter(jobs))
+        try:
+            while state.has_work():
+                if self._proc is None:
+                    self._start()
+                self._send_what_fits(state)
+                try:
+                    yield from self._receive(state)
+                except _Restart as restart:
+                    yield from self._recover(state, restart)
+        finally:
+            if state.inflight:  # abandoned mid-run: the answers still coming would desynchronise the next run
+                self.close()
+
+    def _send_what_fits(self, state: _RunState) -> None:
+        if state.replay:
+            if not state.inflight:
+                self._send(state, state.replay.popleft())
+            return
+        while len(state.inflight) < self.pipeline and (call := state.next_call()) is not None:
+            self._send(state, call)
+
+    def _send(self, state: _RunState, call: _Call) -> None:
+        ident = next(self._ids)
+        call.sent = time.monotonic()
+        state.inflight[ident] = call
+        self._proc.send({"id": ident, **call.body})
+
+    def _receive(self, state: _RunState) -> Iterator[tuple[Job, Answer]]:
+        """Handle the next event of the program; raises _Restart when the program must be restarted."""
+        oldest = next(iter(state.inflight.values()))
+        deadline = max(oldest.sent, state.last_answer) + self.timeout
+        event = self._proc.next_event(deadline - time.monotonic())
+        if event is None:
+            raise _Restart(f"no answer within {self.timeout:g} s", oldest,
+                           Answer("timeout", reason=f"no answer within {self.timeout:g} s"))
+        kind, raw = event
+        if kind == "eof":
+            raise self._unattributed(state, "crash", f"adapter {self._proc.exit_status()}")
+        if kind == "oversize":
+            raise self._unattributed(state, "adapter-error",
+                                     f"adapter wrote a line over {self.max_line} bytes: {_snippet(raw)}")
+        try:
+            reply = _parse(raw)
+        except ValueError:
+            raise self._unattributed(state, "adapter-error",
+                                     f"adapter wrote a line that is not JSON: {_snippet(raw)}") from None
+        ident = reply.get("id") if isinstance(reply, dict) else None
+        call = state.inflight.pop(ident, None) if isinstance(ident, int) and not isinstance(ident, bool) else None
+        if call is None:
+            what = "not a JSON object" if not isinstance(reply, dict) else "an answer to no request in flight"
+            raise self._unattributed(state, "adapter-error", f"adapter wrote {what}: {_snippet(raw)}")
+        state.answered()
+        yield from state.finish(call, _answer(call.body["op"], reply))
+
+    @staticmethod
+    def _unattributed(state: _RunState, kind: str, reason: str) -> _Restart:
+        """A failure naming no request: the in-flight request's if it was replayed alone, else no one's yet."""
+        calls = list(state.inflight.values())
+        blame = calls[0] if len(calls) == 1 and calls[0].replayed else None
+        return _Restart(reason, blame, Answer(kind, reason=reason))
+
+    def _recover(self, state: _RunState, restart: _Restart) -> Iterator[tuple[Job, Answer]]:
+        """Fail the blamed call, queue the other calls in flight for replay, restart the program."""
+        if restart.blame is not None:
+            state.inflight = {i: c for i, c in state.inflight.items() if c is not restart.blame}
+            yield restart.blame.job, restart.answer
+        for call in state.inflight.values():
+            call.replayed = True
+        state.replay.extendleft(reversed(list(state.inflight.values())))
+        state.inflight.clear()
+        self._proc.stop(kill=True)
+        self._proc = None
+        self._tail.add(f"\n[imc-conformance: restarting the adapter: {restart.why}]\n".encode())
+        state.restarts += 1
+        if state.restarts > MAX_RESTARTS:
+            yield from state.abandon(f"adapter keeps crashing ({MAX_RESTARTS} restarts without an answer; "
+                                     f"last: {restart.why})")
+            return
+        try:
+            self._start()
+        except AdapterStartError as exc:
+            yield from state.abandon(f"adapter could not be restarted: {exc}")
+
+
+class _RunState:
+    """What one ``run`` has left to do: jobs not yet started, calls to replay, calls in flight."""
+
+    def __init__(self, jobs: Iterator[Job]):
+        self.jobs = jobs
+        self.ready: deque[_Call] = deque()  # second halves of roundtrips, sent before new jobs
+        self.replay: deque[_Call] = deque()  # sent one at a time after a restart
+        self.inflight: dict[int, _Call] = {}
+        self.last_answer = 0.0
+        self.restarts = 0  # in a row, without an answer
+        self._exhausted = False
+
+    def has_work(self) -> bool:
+        self._pull()
+        return bool(self.inflight or self.replay or self.ready)
+
+    def next_call(self) -> _Call | None:
+        self._pull()
+        return self.ready.popleft() if self.ready else None
+
+    def _pull(self) -> None:
+        """Make the next job's first call ready if nothing else is."""
+        if not self.ready and not self._exhausted:
+            job = next(self.jobs, None)
+            if job is None:
+                self._exhausted = True
+            else:
+                self.ready.append(_first_call(job))
+
+    def answered(self) -> None:
+        self.last_answer, self.restarts = time.monotonic(), 0
+
+    def finish(self, call: _Call, answer: Answer) -> Iterator[tuple[Job, Answer]]:
+        """Yield the job's answer, or queue the encode half of a roundtrip whose decode succeeded."""
+        if call.then_encode and answer.kind == "ok":
+            body = {"op": "encode", "suite": call.job.suite, "message": answer.message,
+                    "byte_order": call.job.request.byte_order}
+            self.ready.appendleft(_Call(call.job, body))
+        else:
+            yield call.job, answer
+
+    def abandon(self, reason: str) -> Iterator[tuple[Job, Answer]]:
+        """Every job not yet answered fails with ``reason``."""
+        answer = Answer("adapter-error", reason=reason)
+        pending = [*self.replay, *self.ready]
+        self.replay.clear()
+        self.ready.clear()
+        for call in pending:
+            yield call.job, answer
+        for job in self.jobs:
+            yield job, answer
+        self._exhausted = True

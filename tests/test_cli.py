@@ -1,0 +1,125 @@
+"""The command line: exit codes, waivers, reports, re-rendering, bad input answered clearly."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+
+import pytest
+
+from imc_conformance.cli import main
+
+I3 = "imc/TextMessage/text/text/utf8"  # fails with imcpy: erratum I3
+PASSING = "imc/LblRange/minimal"
+
+
+def run(*args, capsys=None):
+    code = main(["run", "--adapter", "imcpy", "--no-progress", *args])
+    return code
+
+
+def test_passing_selection_exits_0(capsys):
+    assert run("--message", "LblRange") == 0
+    out = capsys.readouterr().out
+    assert "LblRange" in out and "93 cases" in out
+
+
+def test_a_failure_exits_1_and_names_the_erratum(capsys):
+    assert run("--id", I3) == 1
+    out = capsys.readouterr().out
+    assert "FAIL imc/TextMessage/text/text/utf8" in out and "erratum I3" in out
+
+
+def test_usage_and_adapter_errors_exit_2(capsys, tmp_path):
+    assert main(["run", "--adapter", "no_such_module:adapter", "--no-progress"]) == 2
+    assert "cannot load adapter 'no_such_module:adapter'" in capsys.readouterr().err
+    assert run("--message", "NoSuchMessage") == 2
+    assert "unknown message(s): NoSuchMessage" in capsys.readouterr().err
+    assert run("--id", "imc/nothing/*") == 2
+    assert main(["run", "--adapter-cmd", str(tmp_path / "missing-program"), "--no-progress"]) == 2
+    assert "missing-program" in capsys.readouterr().err
+
+
+def waivers(tmp_path, *entries):
+    path = tmp_path / "waivers.json"
+    path.write_text(json.dumps({"waivers": list(entries)}))
+    return str(path)
+
+
+def test_a_waived_failure_is_waived_and_exits_0(tmp_path, capsys):
+    path = waivers(tmp_path, {"id": I3, "reason": "imcpy's getter is lossy (I3)"})
+    out = tmp_path / "result.json"
+    assert run("--id", I3, "--waivers", path, "--json", str(out)) == 0
+    case = json.loads(out.read_text())["messages"][0]["cases"][0]
+    assert case["verdict"] == "WAIVED" and case["waiver"] == "imcpy's getter is lossy (I3)"
+
+
+def test_a_waiver_on_a_passing_case_is_stale_and_exits_1(tmp_path, capsys):
+    path = waivers(tmp_path, {"id": PASSING, "reason": "was broken once"})
+    assert run("--id", PASSING, "--waivers", path) == 1
+    assert "WAIVER_STALE imc/LblRange/minimal" in capsys.readouterr().out
+
+
+def test_a_waiver_for_an_unknown_case_is_an_error(tmp_path, capsys):
+    path = waivers(tmp_path, {"id": "imc/LblRange/no-such-case", "reason": "typo"})
+    assert run("--id", PASSING, "--waivers", path) == 2
+    assert "$.waivers[0]: no case has the id 'imc/LblRange/no-such-case'" in capsys.readouterr().err
+
+
+def test_an_expired_waiver_no_longer_applies(tmp_path, capsys):
+    yesterday = (dt.date.today() - dt.timedelta(days=1)).isoformat()
+    path = waivers(tmp_path, {"id": I3, "reason": "temporary", "expires": yesterday})
+    assert run("--id", I3, "--waivers", path) == 1
+    assert f"expired on {yesterday}" in capsys.readouterr().out
+
+
+def test_write_waivers_then_adopt_them(tmp_path, capsys):
+    path = tmp_path / "start.json"
+    assert run("--message", "TextMessage", "--write-waivers", str(path)) == 1
+    written = json.loads(path.read_text())["waivers"]
+    assert {w["id"] for w in written} == {f"imc/TextMessage/text/{f}/{k}" for f in ("origin", "text")
+                                          for k in ("utf8", "invalid-utf8", "latin1")}
+    assert run("--message", "TextMessage", "--waivers", str(path)) == 0
+
+
+def test_reports_are_written_and_re_rendered(tmp_path, capsys):
+    files = {fmt: tmp_path / f"r.{fmt}" for fmt in ("json", "junit", "markdown", "html")}
+    assert run("--message", "TextMessage", *(a for fmt, p in files.items() for a in (f"--{fmt}", str(p)))) == 1
+    assert all(p.stat().st_size > 500 for p in files.values())
+    again = tmp_path / "again.html"
+    assert main(["report", str(files["json"]), "--html", str(again)]) == 1
+    assert again.read_text() == files["html"].read_text()
+    assert main(["report", str(files["markdown"])]) == 2  # not a JSON result
+
+
+def test_strict_turns_non_strict_into_failure(tmp_path, capsys):
+    adapter = tmp_path / "blames_crc.py"
+    adapter.write_text(
+        "from imc_conformance import codec\n"
+        "from imc_conformance.adapter_api import Rejected\n"
+        "from imc_conformance.definitions import load_definitions\n"
+        "D = load_definitions()\n"
+        "class A:\n"
+        "    def hello(self): return {'implementation': 'blames-crc', 'byte_orders': ['le', 'be']}\n"
+        "    def encode(self, s, m, o): return codec.encode(D, m, o)\n"
+        "    def decode(self, s, f):\n"
+        "        try: return codec.decode(D, f)\n"
+        "        except codec.FrameError as e: raise Rejected(e.detail, 'crc')\n"
+        "adapter = A()\n")
+    args = ["run", "--adapter", f"{adapter}:adapter", "--no-progress", "--id", "imc/LblRange/sync/*"]
+    assert main(args) == 0
+    assert main([*args, "--strict"]) == 1
+    assert "NON_STRICT imc/LblRange/sync/zero/le" in capsys.readouterr().out
+
+
+def test_list_prints_ids_expectations_and_clauses(capsys):
+    assert main(["list", "--message", "LblRange", "--tag", "invalid"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines and all(line.split("\t")[1] == "invalid" for line in lines)
+    assert "imc/LblRange/crc/footer-first-byte/le\tinvalid\timc-wire#crc" in lines
+
+
+@pytest.mark.parametrize("edition,expected", [("imc-5.4.30", "valid"), ("imc-5.4.11", "acceptable")])
+def test_editions_change_expectations(edition, expected, capsys):
+    assert main(["list", "--edition", edition, "--id", "imc/AcousticStatus/enum/status/DELIVERED-4"]) == 0
+    assert capsys.readouterr().out.split("\t")[1] == expected

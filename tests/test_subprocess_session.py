@@ -1,0 +1,298 @@
+"""The subprocess session: pipelining, failures pinned on the right case, start-up errors, and the shims.
+
+Deliberately broken programs (``tests/broken_programs``) each misbehave on one case's frame; the
+case must get the failure's verdict and every other case the verdict of the correct program.
+The imcpy and pyimclsts shims must give the same verdicts as the library adapters over the corpus.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+from imc_conformance.corpus_data import load_cases
+from imc_conformance.definitions import load_definitions
+from imc_conformance.evaluate import Judge, Verdict, expectation, plan, worst
+from imc_conformance.library import LibrarySession
+from imc_conformance.session import AdapterStartError, Job
+from imc_conformance.subprocess_session import MAX_RESTARTS, SubprocessSession
+
+EDITION = "imc-5.4.30"
+EDITIONS = ("imc-5.4.11", "imc-5.4.30")
+ROOT = Path(__file__).resolve().parent.parent
+PROGRAMS = Path(__file__).resolve().parent / "broken_programs"
+CASES = load_cases()
+SELECTION = [c for c in CASES if c["id"].split("/")[1] in ("LblRange", "AcousticStatus")]
+TRIGGER = "imc/LblRange/realistic/crosscheck"
+TRIGGER_FRAME = next(c for c in SELECTION if c["id"] == TRIGGER)["frames"]["le"]
+JUDGE = Judge(load_definitions())
+
+
+@contextmanager
+def session(argv: list[str], **options):
+    """A session that closes; programs get 30 s to start, however short the per-request timeout."""
+    name = Path(argv[1]).stem if len(argv) > 1 else argv[0]
+    s = SubprocessSession(argv, name=name, **{"hello_timeout": 30, **options})
+    try:
+        yield s
+    finally:
+        s.close()
+
+
+def program(name: str) -> list[str]:
+    return [sys.executable, str(PROGRAMS / f"{name}.py"), TRIGGER_FRAME]
+
+
+def collect(s, cases, editions=(EDITION,)) -> tuple[set[str], dict]:
+    """The orders ``s`` emits, and its answer to every check of ``cases`` under ``editions``.
+
+    Answers are keyed by (case id, check); a check planned under both editions is asked once.
+    """
+    emits = set(s.hello()["byte_orders"])
+    jobs = {}
+    for case in cases:
+        for edition in editions:
+            for request in plan(case, edition, emits):
+                jobs.setdefault((case["id"], request.check), Job(f"{case['id']}#{request.check}", "imc", case, request))
+    answers = {}
+    for job, answer in s.run(jobs.values()):
+        key = (job.case["id"], job.request.check)
+        assert key not in answers, f"{key} answered twice"
+        answers[key] = answer
+    assert answers.keys() == jobs.keys()
+    return emits, answers
+
+
+def checks(cases, emits, answers, edition=EDITION) -> dict[str, list]:
+    """Case id -> the CheckResults of its checks under ``edition``."""
+    out = {}
+    for case in cases:
+        results = [JUDGE.judge(case, edition, r, answers[case["id"], r.check]) for r in plan(case, edition, emits)]
+        if results:
+            out[case["id"]] = results
+    return out
+
+
+def verdicts(cases, emits, answers, edition=EDITION) -> dict[str, Verdict]:
+    return {cid: worst(results) for cid, results in checks(cases, emits, answers, edition).items()}
+
+
+@pytest.fixture(scope="module")
+def reference() -> dict[str, Verdict]:
+    with session(program("reference")) as s:
+        return verdicts(SELECTION, *collect(s, SELECTION))
+
+
+# ---------------------------------------------------------------- broken programs
+
+def test_the_trigger_frame_belongs_to_one_case_only():
+    owners = [c["id"] for c in SELECTION if TRIGGER_FRAME in c.get("frames", {}).values()]
+    assert owners == [TRIGGER]
+
+
+def test_the_reference_program_passes_the_selection(reference):
+    assert set(reference.values()) <= {Verdict.PASS, Verdict.IMPL_DEFINED}
+    assert reference[TRIGGER] == Verdict.PASS
+    assert reference.keys() == {c["id"] for c in SELECTION if plan(c, EDITION, {"le", "be"})}
+
+
+@pytest.mark.parametrize("name, verdict", [
+    ("hang", Verdict.TIMEOUT),
+    ("crash", Verdict.CRASH),
+    ("garbage", Verdict.ADAPTER_ERROR),
+    ("unknown_id", Verdict.ADAPTER_ERROR),
+    ("liar", Verdict.FAIL),
+    ("malformed", Verdict.ADAPTER_ERROR),
+    ("internal", Verdict.ADAPTER_ERROR),
+])
+def test_a_broken_program_fails_only_the_case_that_triggers_it(reference, name, verdict):
+    with session(program(name), timeout=1) as s:
+        got = verdicts(SELECTION, *collect(s, SELECTION))
+    assert got == {**reference, TRIGGER: verdict}
+
+
+def test_the_failure_reason_names_what_happened():
+    with session(program("garbage"), timeout=1) as s:
+        _, answers = collect(s, SELECTION)
+    assert answers[TRIGGER, "decode-le"].reason == ("adapter wrote a line that is not JSON: "
+                                                    "Segmentation fault? no: just garbage on stdout")
+
+
+def test_stderr_is_kept_across_restarts():
+    with session(program("crash"), timeout=1) as s:
+        _, answers = collect(s, SELECTION)
+        assert answers[TRIGGER, "decode-le"].reason == "adapter exited with code 3"
+        assert "crash.py: dying on the trigger frame" in s.stderr
+        assert "[imc-conformance: restarting the adapter: adapter exited with code 3]" in s.stderr
+
+
+def test_answers_in_any_order_are_matched_by_id(reference):
+    with session([sys.executable, str(PROGRAMS / "reversed_order.py")]) as s:
+        assert verdicts(SELECTION, *collect(s, SELECTION)) == reference
+
+
+def test_a_program_that_keeps_crashing_cannot_hang_the_run():
+    cases = SELECTION[:40]
+    start = time.perf_counter()
+    with session([sys.executable, str(PROGRAMS / "always_crashes.py")], timeout=2) as s:
+        emits, answers = collect(s, cases)
+    kinds = [a.kind for a in answers.values()]
+    assert kinds.count("crash") == MAX_RESTARTS
+    assert kinds.count("adapter-error") == len(kinds) - MAX_RESTARTS
+    assert all("keeps crashing" in a.reason for a in answers.values() if a.kind == "adapter-error")
+    assert time.perf_counter() - start < 30
+
+
+def test_an_abandoned_run_leaves_the_session_usable(reference):
+    with session(program("reference")) as s:
+        jobs = [Job(f"{c['id']}#{r.check}", "imc", c, r) for c in SELECTION for r in plan(c, EDITION, {"le", "be"})]
+        run = s.run(jobs)
+        next(run)
+        run.close()  # with requests still in flight
+        assert verdicts(SELECTION, *collect(s, SELECTION)) == reference
+
+
+RESTARTS_ONCE = """
+import json, os, sys
+marker = sys.argv[1]
+if os.path.exists(marker):
+    sys.exit("cannot start twice")
+open(marker, "w").close()
+for line in sys.stdin:
+    request = json.loads(line)
+    if request["op"] != "hello":
+        os._exit(3)
+    print(json.dumps({"id": request["id"], "ok": True, "implementation": "once", "suites": ["imc"],
+                      "byte_orders": ["le"]}), flush=True)
+"""
+
+
+def test_a_program_that_cannot_be_restarted_fails_the_remaining_jobs(tmp_path):
+    with session([sys.executable, "-c", RESTARTS_ONCE, str(tmp_path / "started")], timeout=2) as s:
+        _, answers = collect(s, SELECTION[:10])
+    assert {a.kind for a in answers.values()} == {"adapter-error"}
+    assert {a.reason for a in answers.values()} == {
+        "adapter could not be restarted: adapter exited with code 1 before answering hello; stderr: cannot start twice"}
+
+
+# ---------------------------------------------------------------- long lines
+
+def test_a_65536_byte_frame_and_a_131_kb_answer_go_through(reference):
+    big = [c for c in SELECTION if max(map(len, c.get("frames", {"": ""}).values())) >= 2 * 65535]
+    assert {len(f) // 2 for c in big for f in c["frames"].values()} == {65535, 65536}
+    with session(program("reference")) as s:
+        assert verdicts(big, *collect(s, big)) == {c["id"]: reference[c["id"]] for c in big}
+    assert {reference[c["id"]] for c in big} == {Verdict.PASS}
+
+
+def test_a_line_over_max_line_is_an_adapter_error(reference):
+    max_line = 100_000  # a valid 65535-byte frame is a 131 KB encode answer
+    too_long = {c["id"] for c in SELECTION
+                if expectation(c, EDITION) == "valid" and max(map(len, c["frames"].values())) > max_line}
+    assert "imc/AcousticStatus/text/info/max-payload" in too_long
+    with session(program("reference"), max_line=max_line) as s:
+        got = verdicts(SELECTION, *collect(s, SELECTION))
+    assert got == {**reference, **dict.fromkeys(too_long, Verdict.ADAPTER_ERROR)}
+
+
+# ---------------------------------------------------------------- start-up errors
+
+def python(code: str) -> list[str]:
+    return [sys.executable, "-c", code]
+
+
+ANSWER_HELLO = "import json, time; json.loads(input()); print(json.dumps({reply!r}), flush=True); time.sleep(60)"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["/nonexistent/adapter", "--flag"],
+     "cannot start adapter ['/nonexistent/adapter', '--flag']: No such file or directory"),
+    (python("import sys; sys.stderr.write('no IMC here'); sys.exit(4)"),
+     "adapter exited with code 4 before answering hello; stderr: no IMC here"),
+    (python("print('Hello, world!'); import time; time.sleep(60)"),
+     "adapter answered hello with something that is not a JSON object: Hello, world!"),
+    (python(ANSWER_HELLO.format(reply={"id": 1, "ok": False, "error": "no"})), "adapter refused hello: no"),
+    (python(ANSWER_HELLO.format(reply={"id": 1, "ok": True})),
+     "adapter's hello answer needs 'implementation' (a string)"),
+])
+def test_start_up_errors_are_clear(argv, message):
+    s = SubprocessSession(argv, name="broken", timeout=30)
+    with pytest.raises(AdapterStartError) as error:
+        s.hello()
+    assert str(error.value).startswith(message)
+    s.close()
+
+
+def test_a_program_that_never_answers_hello_times_out():
+    s = SubprocessSession(python("import time; time.sleep(60)"), name="silent", timeout=0.5)
+    start = time.perf_counter()
+    with pytest.raises(AdapterStartError, match=r"^adapter did not answer hello within 0\.5 s$"):
+        s.hello()
+    assert time.perf_counter() - start < 10  # and the program was killed, not waited for
+
+
+def test_a_file_that_is_not_executable_cannot_start(tmp_path):
+    script = tmp_path / "adapter.py"
+    script.write_text("print('never')\n")
+    with pytest.raises(AdapterStartError, match=r"cannot start adapter \[.*\]: Permission denied"):
+        SubprocessSession([str(script)], name="not-executable").hello()
+
+
+def test_a_shim_answers_bad_requests_without_dying():
+    requests = ['{"id": 1, "op": "decode", "suite": "imc", "frame": "zz"}', "not json",
+                '{"id": 2, "op": "frobnicate"}', '{"id": 3, "op": "decode", "suite": "other", "frame": ""}',
+                '{"id": 4, "op": "encode", "suite": "imc", "message": {"abbrev": "LblRange"}, "byte_order": "be"}',
+                '{"id": 5, "op": "encode", "suite": "imc", "message": {"abbrev": "Nope"}, "byte_order": "le"}',
+                '{"id": 6, "op": "decode", "suite": "imc", "frame": "' + TRIGGER_FRAME[:-4] + '0000"}']
+    done = subprocess.run([sys.executable, str(ROOT / "adapters" / "imcpy_shim.py")], input="\n".join(requests) + "\n",
+                          capture_output=True, text=True, timeout=60)
+    replies = [json.loads(line) for line in done.stdout.splitlines()]
+    assert [(r["id"], r["ok"], r.get("internal"), r.get("unsupported"), r.get("rule")) for r in replies] == [
+        (1, False, True, None, None), (None, False, True, None, None), (2, False, None, True, None),
+        (3, False, None, True, None), (4, False, None, True, None), (5, False, None, None, "unknown-message"),
+        (6, False, None, None, "crc")]
+    assert done.returncode == 0
+
+
+# ---------------------------------------------------------------- the shims against the library adapters
+
+def assert_same_verdicts(library, shim) -> None:
+    emits_lib, answers_lib = collect(library, CASES, EDITIONS)
+    start = time.perf_counter()
+    emits_shim, answers_shim = collect(shim, CASES, EDITIONS)
+    seconds = time.perf_counter() - start
+    print(f"{shim.name}: {len(CASES)} cases, {len(answers_shim)} checks in {seconds:.2f} s: "
+          f"{len(CASES) / seconds:.0f} cases/s through the subprocess session")
+    assert emits_shim == emits_lib
+    for edition in EDITIONS:
+        lib, sub = (checks(CASES, emits, answers, edition)
+                    for emits, answers in ((emits_lib, answers_lib), (emits_shim, answers_shim)))
+        assert {cid: worst(r) for cid, r in sub.items()} == {cid: worst(r) for cid, r in lib.items()}
+        summary = {cid: [(r.check, r.verdict, r.outcome) for r in results] for cid, results in lib.items()}
+        assert {cid: [(r.check, r.verdict, r.outcome) for r in results] for cid, results in sub.items()} == summary
+
+
+def test_the_imcpy_shim_gives_the_imcpy_adapters_verdicts():
+    from imc_conformance.adapters.imcpy_adapter import adapter
+    library = LibrarySession(adapter(), "imcpy")
+    with session([sys.executable, str(ROOT / "adapters" / "imcpy_shim.py")]) as shim:
+        assert shim.hello() == library.hello()
+        assert_same_verdicts(library, shim)
+
+
+def test_the_pyimclsts_shim_gives_the_pyimclsts_adapters_verdicts(tmp_path):
+    pyimclsts_adapter = pytest.importorskip("imc_conformance.adapters.pyimclsts_adapter")
+    from imc_conformance.imc_xml import fetch_imc_xml
+    library = LibrarySession(pyimclsts_adapter.adapter(), "pyimclsts")
+    argv = [sys.executable, str(ROOT / "adapters" / "pyimclsts_shim.py"),
+            "--imc-xml", str(fetch_imc_xml()), "--cache", str(tmp_path)]
+    with session(argv, hello_timeout=300) as shim:  # the first hello generates pyimclsts's classes
+        assert shim.hello() == library.hello()
+        assert_same_verdicts(library, shim)
+    assert (tmp_path / f"pyimclsts-{pyimclsts_adapter.VERSION}" / "generation.json").exists()
