@@ -138,7 +138,7 @@ class ImcpyAdapter:
     def decode(self, suite: str, frame: bytes) -> dict:
         _check_suite(suite)
         try:
-            msg = imcpy.Packet.deserialize(bytes(frame))
+            msg = imcpy.Packet.deserialize(frame)
         except RuntimeError as exc:
             raise Rejected(str(exc), rule=_dune_rule(str(exc))) from exc
         out = self._message_out(msg)

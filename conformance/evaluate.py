@@ -28,14 +28,14 @@ class Verdict(str, Enum):
     WAIVER_STALE = "WAIVER_STALE"  # a waived case that now passes: the waiver must go
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Request:
     check: str  # "encode-le", "decode-be", "roundtrip-le", ...
     op: str  # "encode" | "decode" | "roundtrip"
     byte_order: str
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Answer:
     """What the implementation did: ``ok`` with a frame or message, or a refusal, or a failure to answer."""
 
@@ -55,7 +55,7 @@ class ByteDiff:
     field: str
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class CheckResult:
     check: str
     verdict: Verdict
@@ -209,9 +209,11 @@ class Judge:
                 f"expected {expected[first:first + 8].hex(' ')}, got {actual[first:first + 8].hex(' ')}")
 
 
+SEVERITY = {v: rank for rank, v in enumerate([
+    Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR, Verdict.FAIL, Verdict.NON_STRICT,
+    Verdict.IMPL_DEFINED, Verdict.UNSUPPORTED, Verdict.PASS])}
+
+
 def worst(results: list[CheckResult]) -> Verdict:
-    """The case verdict: the most severe of its checks."""
-    order = [Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR, Verdict.FAIL, Verdict.NON_STRICT,
-             Verdict.IMPL_DEFINED, Verdict.UNSUPPORTED, Verdict.PASS]
-    present = {r.verdict for r in results}
-    return next((v for v in order if v in present), Verdict.UNSUPPORTED)
+    """The case verdict: the most severe of its checks (UNSUPPORTED if none)."""
+    return min((r.verdict for r in results), key=SEVERITY.__getitem__, default=Verdict.UNSUPPORTED)

@@ -9,25 +9,42 @@ from .evaluate import Answer, Request
 from .session import Job
 
 
-def ask(adapter, suite: str, case: dict, request: Request) -> Answer:
-    """Perform one request; any exception other than Rejected/Unsupported is an adapter error."""
+def _call(fn, *args) -> Answer:
+    """Call the adapter; any exception other than Rejected/Unsupported is an adapter error."""
     try:
-        if request.op == "decode":
-            return Answer("ok", message=adapter.decode(suite, bytes.fromhex(case["frames"][request.byte_order])))
-        if request.op == "encode":
-            return Answer("ok", frame=bytes(adapter.encode(suite, case["message"], request.byte_order)))
-        decoded = adapter.decode(suite, bytes.fromhex(case["frames"][request.byte_order]))
-        return Answer("ok", frame=bytes(adapter.encode(suite, decoded, request.byte_order)))
+        result = fn(*args)
     except Rejected as exc:
         return Answer("rejected", reason=exc.reason, rule=exc.rule)
     except Unsupported as exc:
         return Answer("unsupported", reason=str(exc))
     except Exception as exc:  # an adapter bug must never pass a case
         return Answer("adapter-error", reason=f"{type(exc).__name__}: {exc}")
+    if isinstance(result, dict):
+        return Answer("ok", message=result)
+    if isinstance(result, (bytes, bytearray, memoryview)):
+        return Answer("ok", frame=bytes(result))
+    return Answer("adapter-error", reason=f"the adapter returned a {type(result).__name__}, not bytes or a message")
+
+
+def _roundtrip(adapter, suite: str, decoded: Answer, byte_order: str) -> Answer:
+    """Encode an implementation's own decoding back in the same byte order."""
+    return decoded if decoded.kind != "ok" else _call(adapter.encode, suite, decoded.message, byte_order)
+
+
+def ask(adapter, suite: str, case: dict, request: Request) -> Answer:
+    """Perform one request on its own."""
+    if request.op == "encode":
+        return _call(adapter.encode, suite, case["message"], request.byte_order)
+    decoded = _call(adapter.decode, suite, bytes.fromhex(case["frames"][request.byte_order]))
+    return decoded if request.op == "decode" else _roundtrip(adapter, suite, decoded, request.byte_order)
 
 
 class LibrarySession:
-    """A session over an in-process adapter object; requests run one after the other."""
+    """A session over an in-process adapter object; requests run one after the other.
+
+    A frame is converted from hex once per case, and the roundtrip check reuses the implementation's
+    answer to decoding the same frame (roundtrip is encode(decode(frame))).
+    """
 
     def __init__(self, adapter, name: str):
         self.adapter, self.name = adapter, name
@@ -36,8 +53,22 @@ class LibrarySession:
         return self.adapter.hello()
 
     def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
+        decoded: dict[tuple[str, str], Answer] = {}
+        adapter = self.adapter
         for job in jobs:
-            yield job, ask(self.adapter, job.suite, job.case, job.request)
+            request = job.request
+            if request.op == "encode":
+                yield job, _call(adapter.encode, job.suite, job.case["message"], request.byte_order)
+                continue
+            key = (job.case["id"], request.byte_order)
+            answer = decoded.pop(key, None)
+            if answer is None:
+                answer = _call(adapter.decode, job.suite, bytes.fromhex(job.case["frames"][request.byte_order]))
+            if request.op == "decode":
+                decoded[key] = answer  # kept for this frame's roundtrip check, which follows in plan order
+                yield job, answer
+            else:
+                yield job, _roundtrip(adapter, job.suite, answer, request.byte_order)
 
     @property
     def stderr(self) -> str:

@@ -13,7 +13,7 @@ from typing import Iterable, Iterator, Protocol
 from .evaluate import Answer, Request
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Job:
     """One request of one case: ``key`` is unique within a run (case id + check)."""
 
