@@ -18,3 +18,6 @@ test: $(VENV)/.installed
 
 generate: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance generate
+
+benchmark: $(VENV)/.installed
+	$(VENV)/bin/python -m imc_conformance.benchmark
