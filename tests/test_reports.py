@@ -219,7 +219,7 @@ def test_markdown_summary(imcpy_result):
     text = render_markdown(imcpy_result)
     assert text.splitlines()[0].startswith("## ❌ IMC conformance: FAIL — imcpy 1.1.2")
     assert "| Message | Verdict | PASS | FAIL | IMPL_DEFINED |" in text
-    assert "| Announce (151) | ❌ FAIL | 163 | 6 | 16 |  |" in text
+    assert "| Announce (151) | ❌ FAIL | 163 | 6 | 16 |" in text
     assert "<details><summary>66 failing or non-strict cases</summary>" in text
     assert "<code>imc/Announce/text/sys\\_name/utf8</code>" in text
     assert "and 16 more" in text
