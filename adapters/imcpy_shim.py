@@ -21,13 +21,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import struct
 import sys
 from importlib.metadata import version
 from pathlib import Path
 
 import imcpy
+from shim_protocol import Refused, Unsupported, serve
 
 DEFINITIONS = Path(__file__).resolve().parent.parent / "vectors" / "imc" / "definitions.json"
 SUITE = "imc"
@@ -36,16 +36,7 @@ DEFAULT_NAN = {4: 0x7FC00000, 8: 0x7FF8000000000000}
 FLOAT = {4: (struct.Struct("<f"), struct.Struct("<I")), 8: (struct.Struct("<d"), struct.Struct("<Q"))}
 
 
-class Refused(Exception):
-    """imcpy refused the input; ``rule`` names the corpus rule when the refusal says which."""
 
-    def __init__(self, reason: str, rule: str | None = None):
-        super().__init__(reason)
-        self.reason, self.rule = reason, rule
-
-
-class Unsupported(Exception):
-    """imcpy lacks the capability (a byte order, a suite, a message the definitions lack)."""
 
 
 # ---------------------------------------------------------------- decoded-form values
@@ -281,56 +272,11 @@ def check_suite(suite) -> None:
         raise Unsupported(f"imcpy implements only the {SUITE!r} suite, not {suite!r}")
 
 
-# ---------------------------------------------------------------- the protocol
-
-def perform(shim: ImcpyShim, request: dict) -> dict:
-    op = request.get("op")
-    if op == "hello":
-        return shim.hello()
-    if op == "encode":
-        return {"frame": shim.encode(request.get("suite"), request.get("message"), request.get("byte_order")).hex()}
-    if op == "decode":
-        return {"message": shim.decode(request.get("suite"), bytes.fromhex(request["frame"]))}
-    raise Unsupported(f"operation {op!r}")
-
-
-def respond(shim: ImcpyShim, line: bytes) -> str:
-    """The answer line to one request line; a failure of the shim itself is ``internal``."""
-    ident = None
-    try:
-        request = json.loads(line)
-        ident = request["id"]
-        reply = {"id": ident, "ok": True, **perform(shim, request)}
-    except Refused as exc:
-        reply = {"id": ident, "ok": False, "error": exc.reason, **({"rule": exc.rule} if exc.rule else {})}
-    except Unsupported as exc:
-        reply = {"id": ident, "ok": False, "unsupported": True, "error": str(exc)}
-    except Exception as exc:
-        reply = {"id": ident, "ok": False, "internal": True, "error": f"{type(exc).__name__}: {exc}"}
-    try:
-        return json.dumps(reply, separators=(",", ":"), allow_nan=False)
-    except ValueError as exc:
-        return json.dumps({"id": ident, "ok": False, "internal": True, "error": f"unserialisable answer: {exc}"})
-
-
-def protocol_stdout():
-    """The real stdout for answers; fd 1 and ``sys.stdout`` become stderr so stray prints cannot corrupt it."""
-    out = os.fdopen(os.dup(1), "wb")
-    os.dup2(2, 1)
-    sys.stdout = sys.stderr
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     parser.add_argument("--definitions", type=Path, default=DEFINITIONS)
     args = parser.parse_args(argv)
-    out = protocol_stdout()
-    shim = ImcpyShim(json.loads(args.definitions.read_text(encoding="utf-8")))
-    for line in sys.stdin.buffer:
-        out.write(respond(shim, line).encode() + b"\n")
-        out.flush()
-    return 0
+    return serve(lambda: ImcpyShim(json.loads(args.definitions.read_text(encoding="utf-8"))))
 
 
 if __name__ == "__main__":

@@ -36,6 +36,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from shim_protocol import Refused, Unsupported, serve
+
 DEFINITIONS = Path(__file__).resolve().parent.parent / "vectors" / "imc" / "definitions.json"
 PACKAGE = "pyimc_generated"  # fixed by pyimclsts.extract and pyimclsts.network
 VERSION = importlib.metadata.version("pyimclsts")
@@ -46,16 +48,7 @@ WIDTH = {"fp32_t": 4, "fp64_t": 8}
 INT_RANGE = re.compile(r"format requires|out of range|too large to convert")
 
 
-class Refused(Exception):
-    """pyimclsts refused the input; ``rule`` names the corpus rule when the refusal says which."""
 
-    def __init__(self, reason: str, rule: str | None = None):
-        super().__init__(reason)
-        self.reason, self.rule = reason, rule
-
-
-class Unsupported(Exception):
-    """The capability is absent (a byte order, a suite)."""
 
 
 # ---------------------------------------------------------------- generated classes
@@ -321,46 +314,6 @@ def check_suite(suite) -> None:
         raise Unsupported(f"suite {suite!r}")
 
 
-# ---------------------------------------------------------------- the protocol
-
-def perform(shim: PyimclstsShim, request: dict) -> dict:
-    op = request.get("op")
-    if op == "hello":
-        return shim.hello()
-    if op == "encode":
-        return {"frame": shim.encode(request.get("suite"), request.get("message"), request.get("byte_order")).hex()}
-    if op == "decode":
-        return {"message": shim.decode(request.get("suite"), bytes.fromhex(request["frame"]))}
-    raise Unsupported(f"operation {op!r}")
-
-
-def respond(shim: PyimclstsShim, line: bytes) -> str:
-    """The answer line to one request line; a failure of the shim itself is ``internal``."""
-    ident = None
-    try:
-        request = json.loads(line)
-        ident = request["id"]
-        reply = {"id": ident, "ok": True, **perform(shim, request)}
-    except Refused as exc:
-        reply = {"id": ident, "ok": False, "error": exc.reason, **({"rule": exc.rule} if exc.rule else {})}
-    except Unsupported as exc:
-        reply = {"id": ident, "ok": False, "unsupported": True, "error": str(exc)}
-    except Exception as exc:
-        reply = {"id": ident, "ok": False, "internal": True, "error": f"{type(exc).__name__}: {exc}"}
-    try:
-        return json.dumps(reply, separators=(",", ":"), allow_nan=False)
-    except ValueError as exc:
-        return json.dumps({"id": ident, "ok": False, "internal": True, "error": f"unserialisable answer: {exc}"})
-
-
-def protocol_stdout():
-    """The real stdout for answers; fd 1 and ``sys.stdout`` become stderr so stray prints cannot corrupt it."""
-    out = os.fdopen(os.dup(1), "wb")
-    os.dup2(2, 1)
-    sys.stdout = sys.stderr
-    return out
-
-
 def default_cache() -> Path:
     return Path(os.environ.get("IMC_CONFORMANCE_CACHE") or Path.home() / ".cache" / "imc-conformance")
 
@@ -371,13 +324,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cache", type=Path, default=default_cache())
     parser.add_argument("--definitions", type=Path, default=DEFINITIONS)
     args = parser.parse_args(argv)
-    out = protocol_stdout()
-    network = import_network(generated_dir(args.cache, args.imc_xml))
-    shim = PyimclstsShim(network, json.loads(args.definitions.read_text(encoding="utf-8")))
-    for line in sys.stdin.buffer:
-        out.write(respond(shim, line).encode() + b"\n")
-        out.flush()
-    return 0
+    return serve(lambda: PyimclstsShim(import_network(generated_dir(args.cache, args.imc_xml)),
+                                       json.loads(args.definitions.read_text(encoding="utf-8"))))
 
 
 if __name__ == "__main__":

@@ -79,7 +79,7 @@ def coverage_markdown(defs: Definitions, per_message: dict[str, list[dict]]) -> 
                     classes[cls][k[0]] += 1
             text = ", ".join(f"{cls} ({'/'.join(f'{n}{k}' for k, n in sorted(cnt.items()))})" for cls, cnt in classes.items())
             lines.append(f"| {f.abbrev} | {f.type} | {text or 'none'} |")
-        lines += [f"", f"Header variants: {header_cases}.", ""]
+        lines += ["", f"Header variants: {header_cases}.", ""]
     if problems:
         raise ValueError("coverage requirements not met:\n" + "\n".join(problems))
     return "\n".join(lines).rstrip() + "\n"

@@ -1,0 +1,72 @@
+"""The JSON-lines protocol loop shared by the subprocess shims (standard library only).
+
+A shim provides an object with ``hello()``, ``encode(suite, message, byte_order) -> bytes`` and
+``decode(suite, frame) -> dict``, raising ``Refused`` or ``Unsupported``; ``serve`` does the rest.
+It imports nothing from imc_conformance, so the shims stay independent of the suite's own code.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+
+
+class Refused(Exception):
+    """The implementation refused the input; ``rule`` names the corpus rule when the refusal says which."""
+
+    def __init__(self, reason: str, rule: str | None = None):
+        super().__init__(reason)
+        self.reason, self.rule = reason, rule
+
+
+class Unsupported(Exception):
+    """The capability is absent (a byte order, a suite, a message)."""
+
+
+def perform(shim, request: dict) -> dict:
+    op = request.get("op")
+    if op == "hello":
+        return shim.hello()
+    if op == "encode":
+        return {"frame": shim.encode(request.get("suite"), request.get("message"), request.get("byte_order")).hex()}
+    if op == "decode":
+        return {"message": shim.decode(request.get("suite"), bytes.fromhex(request["frame"]))}
+    raise Unsupported(f"operation {op!r}")
+
+
+def respond(shim, line: bytes) -> str:
+    """The answer line to one request line; a failure of the shim itself is ``internal``."""
+    ident = None
+    try:
+        request = json.loads(line)
+        ident = request["id"]
+        reply = {"id": ident, "ok": True, **perform(shim, request)}
+    except Refused as exc:
+        reply = {"id": ident, "ok": False, "error": exc.reason, **({"rule": exc.rule} if exc.rule else {})}
+    except Unsupported as exc:
+        reply = {"id": ident, "ok": False, "unsupported": True, "error": str(exc)}
+    except Exception as exc:
+        reply = {"id": ident, "ok": False, "internal": True, "error": f"{type(exc).__name__}: {exc}"}
+    try:
+        return json.dumps(reply, separators=(",", ":"), allow_nan=False)
+    except ValueError as exc:
+        return json.dumps({"id": ident, "ok": False, "internal": True, "error": f"unserialisable answer: {exc}"})
+
+
+def protocol_stdout():
+    """The real stdout for answers; fd 1 and ``sys.stdout`` become stderr so stray prints cannot corrupt it."""
+    out = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    return out
+
+
+def serve(make_shim) -> int:
+    """Protect stdout, build the shim (``make_shim()``), then answer every request line until stdin closes."""
+    out = protocol_stdout()
+    shim = make_shim()
+    for line in sys.stdin.buffer:
+        out.write(respond(shim, line).encode() + b"\n")
+        out.flush()
+    return 0
