@@ -20,53 +20,19 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import struct
 import sys
 from importlib.metadata import version
 from pathlib import Path
 
 import imcpy
-from shim_protocol import Refused, Unsupported, serve
+from shim_protocol import FLOAT, Refused, Unsupported, float_bits, float_value, serve
 
 DEFINITIONS = Path(__file__).resolve().parent.parent / "vectors" / "imc" / "definitions.json"
 SUITE = "imc"
 DUNE_ERRORS = {"invalid CRC": "crc", "invalid synchronization number": "sync", "invalid message size": "size-limit"}
-DEFAULT_NAN = {4: 0x7FC00000, 8: 0x7FF8000000000000}
-FLOAT = {4: (struct.Struct("<f"), struct.Struct("<I")), 8: (struct.Struct("<d"), struct.Struct("<Q"))}
-
-
-
 
 
 # ---------------------------------------------------------------- decoded-form values
-
-def float_bits(text: str, width: int) -> int:
-    """IEEE bits of a float written as a string: ``nan``, ``nan:<hex>``, ``inf``, ``-inf``."""
-    if text == "nan":
-        return DEFAULT_NAN[width]
-    as_float, as_bits = FLOAT[width]
-    if text.startswith("nan:"):
-        bits = int(text[4:], 16)
-        if bits >> (8 * width) or not math.isnan(as_float.unpack(as_bits.pack(bits))[0]):
-            raise ValueError(f"{text!r} is not a {8 * width}-bit NaN")
-        return bits
-    if text in ("inf", "-inf"):
-        return as_bits.unpack(as_float.pack(float(text)))[0]
-    raise ValueError(f"{text!r} is not a float value")
-
-
-def float_out(x: float, width: int):
-    """The decoded form of a float at ``width`` bytes: a number, or a string for NaN and infinities."""
-    as_float, as_bits = FLOAT[width]
-    bits = as_bits.unpack(as_float.pack(x))[0]
-    x = as_float.unpack(as_bits.pack(bits))[0]
-    if math.isnan(x):
-        return "nan" if bits == DEFAULT_NAN[width] else f"nan:{bits:0{2 * width}x}"
-    if math.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    return x
-
 
 def text_bytes(value) -> bytes:
     if isinstance(value, str):
@@ -250,7 +216,7 @@ class ImcpyShim:
     def getter(self, f: Field):
         """A function turning an imcpy attribute's value into the field's decoded form."""
         if f.kind == "float":
-            return lambda x: float_out(x, f.size)
+            return lambda x: float_value(x, f.size)
         if f.is_int:
             return int  # enum getters return pybind11 enums
         return {"text": str,  # imcpy's str, lossy for non-ASCII bytes (see the module docstring)

@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import importlib.metadata
 import json
-import math
 import os
 import re
 import shutil
@@ -36,14 +35,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-from shim_protocol import Refused, Unsupported, serve
+from shim_protocol import FLOAT, Refused, Unsupported, float_bits, float_value, serve
 
 DEFINITIONS = Path(__file__).resolve().parent.parent / "vectors" / "imc" / "definitions.json"
 PACKAGE = "pyimc_generated"  # fixed by pyimclsts.extract and pyimclsts.network
 VERSION = importlib.metadata.version("pyimclsts")
 MARKER = "generation.json"
-DEFAULT_NAN = {4: 0x7FC00000, 8: 0x7FF8000000000000}
-FLOAT = {4: (struct.Struct("<f"), struct.Struct("<I")), 8: (struct.Struct("<d"), struct.Struct("<Q"))}
 WIDTH = {"fp32_t": 4, "fp64_t": 8}
 INT_RANGE = re.compile(r"format requires|out of range|too large to convert")
 
@@ -99,35 +96,16 @@ def float_in(value, width: int):
     """A Python float for a float string (via its bits at ``width``); anything else is pyimclsts's to judge."""
     if not isinstance(value, str):
         return value
-    as_float, as_bits = FLOAT[width]
-    if value == "nan":
-        bits = DEFAULT_NAN[width]
-    elif value.startswith("nan:"):
-        try:
-            bits = int(value[4:], 16)
-        except ValueError:
-            return value
-        if bits >> (8 * width) or not math.isnan(as_float.unpack(as_bits.pack(bits))[0]):
-            return value
-    elif value in ("inf", "-inf"):
-        return float(value)
-    else:
+    try:
+        bits = float_bits(value, width)
+    except ValueError:
         return value
+    as_float, as_bits = FLOAT[width]
     return as_float.unpack(as_bits.pack(bits))[0]
 
 
 def float_out(width: int):
-    as_float, as_bits = FLOAT[width]
-
-    def out(x: float):
-        bits = as_bits.unpack(as_float.pack(x))[0]
-        x = as_float.unpack(as_bits.pack(bits))[0]
-        if math.isnan(x):
-            return "nan" if bits == DEFAULT_NAN[width] else f"nan:{bits:0{2 * width}x}"
-        if math.isinf(x):
-            return "inf" if x > 0 else "-inf"
-        return x
-    return out
+    return lambda x: float_value(x, width)
 
 
 def text_in(value):

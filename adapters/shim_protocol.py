@@ -8,8 +8,13 @@ It imports nothing from imc_conformance, so the shims stay independent of the su
 from __future__ import annotations
 
 import json
+import math
 import os
+import struct
 import sys
+
+DEFAULT_NAN = {4: 0x7FC00000, 8: 0x7FF8000000000000}
+FLOAT = {4: (struct.Struct("<f"), struct.Struct("<I")), 8: (struct.Struct("<d"), struct.Struct("<Q"))}
 
 
 class Refused(Exception):
@@ -22,6 +27,33 @@ class Refused(Exception):
 
 class Unsupported(Exception):
     """The capability is absent (a byte order, a suite, a message)."""
+
+
+def float_bits(text: str, width: int) -> int:
+    """IEEE bits of a float written as a string: ``nan``, ``nan:<hex>``, ``inf``, ``-inf`` (else ValueError)."""
+    if text == "nan":
+        return DEFAULT_NAN[width]
+    as_float, as_bits = FLOAT[width]
+    if text.startswith("nan:"):
+        bits = int(text[4:], 16)
+        if bits >> (8 * width) or not math.isnan(as_float.unpack(as_bits.pack(bits))[0]):
+            raise ValueError(f"{text!r} is not a {8 * width}-bit NaN")
+        return bits
+    if text in ("inf", "-inf"):
+        return as_bits.unpack(as_float.pack(float(text)))[0]
+    raise ValueError(f"{text!r} is not a float value")
+
+
+def float_value(x: float, width: int):
+    """The decoded form of a float at ``width`` bytes: a number, or a string for NaN and infinities."""
+    as_float, as_bits = FLOAT[width]
+    bits = as_bits.unpack(as_float.pack(x))[0]
+    x = as_float.unpack(as_bits.pack(bits))[0]
+    if math.isnan(x):
+        return "nan" if bits == DEFAULT_NAN[width] else f"nan:{bits:0{2 * width}x}"
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return x
 
 
 def perform(shim, request: dict) -> dict:
