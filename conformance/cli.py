@@ -12,7 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from .corpus_data import load_cases
+from .corpus_data import CorpusError, load_cases
 from .definitions import load_definitions
 from .evaluate import expectation
 from .results import FAILING, RunResult
@@ -95,7 +95,7 @@ def select(cases: list[dict], args) -> list[dict]:
 
 
 def command_list(args) -> int:
-    for case in select(load_cases(), args):
+    for case in select(load_cases(args.vectors), args):
         print(f"{case['id']}\t{expectation(case, args.edition)}\t{case['clause']}")
     return 0
 
@@ -112,7 +112,7 @@ def command_run(args) -> int:
     unknown = set(args.message) - set(defs.by_abbrev)
     if unknown:
         raise UsageError(f"unknown message(s): {', '.join(sorted(unknown))}")
-    everything = load_cases()
+    everything = load_cases(args.vectors)
     cases = select(everything, args)
     if not cases:
         raise UsageError("the selection matches no case")
@@ -182,6 +182,7 @@ def add_selection(parser) -> None:
     parser.add_argument("--message", action="append", default=[], metavar="ABBREV", help="only this message (repeatable)")
     parser.add_argument("--id", action="append", default=[], metavar="GLOB", help="only case ids matching (repeatable)")
     parser.add_argument("--tag", action="append", default=[], help="only cases with this tag (repeatable), e.g. invalid")
+    parser.add_argument("--vectors", type=Path, metavar="DIR", help="vector files to use instead of the packaged corpus")
 
 
 def add_reports(parser) -> None:
@@ -228,7 +229,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except UsageError as exc:
+    except (UsageError, CorpusError) as exc:
         print(f"imc-conformance: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into head(1) and the like

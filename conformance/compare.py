@@ -64,6 +64,21 @@ class Comparator:
             checkers = self._checkers[abbrev] = self._build(self.defs[abbrev])
         self._check(checkers, expected, actual, path, nan_payload, out)
 
+    def unknown_messages(self, value) -> list[str]:
+        """Message names in an answer that no definition has (an adapter error, not the implementation's)."""
+        found: list[str] = []
+        stack = [value]
+        while stack:
+            item = stack.pop()
+            if isinstance(item, dict):
+                abbrev = item.get("abbrev")
+                if "fields" in item and not (isinstance(abbrev, str) and abbrev in self.defs.by_abbrev):
+                    found.append(repr(abbrev)[:100])
+                stack.extend(item.values())
+            elif isinstance(item, list):
+                stack.extend(item)
+        return found
+
     @staticmethod
     def _check(checkers, expected: dict, actual: dict, path: str, nan_payload: bool, out: list, extra_ok=False) -> None:
         for name, check in checkers:

@@ -117,6 +117,8 @@ class Judge:
         if request.op == "decode":
             diffs = self.compare.messages(case["message"], answer.message,
                                           nan_payload=case.get("compare", {}).get("nan_payload", False))
+            if diffs and (unknown := self.compare.unknown_messages(answer.message)):
+                return CheckResult(check, Verdict.ADAPTER_ERROR, f"the answer names unknown message(s) {', '.join(unknown)}")
             if diffs:
                 return self.failure(check, "; ".join(str(d) for d in diffs[:5]), expected,
                                     self.reencoded(answer.message, request.byte_order))
@@ -147,6 +149,8 @@ class Judge:
         if request.op == "decode":
             diffs = self.compare.messages(case["message"], answer.message,
                                           nan_payload=case.get("compare", {}).get("nan_payload", False))
+            if diffs and (unknown := self.compare.unknown_messages(answer.message)):
+                return CheckResult(check, Verdict.ADAPTER_ERROR, f"the answer names unknown message(s) {', '.join(unknown)}")
             if not diffs and "accept" in permitted:
                 return CheckResult(check, Verdict.IMPL_DEFINED, "accepted", "accept")
             expected = bytes.fromhex(case["frames"][request.byte_order])

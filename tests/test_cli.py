@@ -123,3 +123,32 @@ def test_list_prints_ids_expectations_and_clauses(capsys):
 def test_editions_change_expectations(edition, expected, capsys):
     assert main(["list", "--edition", edition, "--id", "imc/AcousticStatus/enum/status/DELIVERED-4"]) == 0
     assert capsys.readouterr().out.split("\t")[1] == expected
+
+
+@pytest.mark.parametrize("mangle,message", [
+    (lambda doc: doc["cases"][3].update(expect="maybe"), "$.cases[3].expect: expected one of"),
+    (lambda doc: doc["cases"][0]["frames"].update(le="54f"), "$.cases[0].frames.le: expected hex bytes"),
+    (lambda doc: doc["cases"][-1].pop("rule"), "].rule: an invalid case names the rule it breaks"),
+    (lambda doc: doc.update(cases={}), "$.cases: expected an array of cases"),
+])
+def test_a_malformed_vector_file_names_the_file_and_json_path(tmp_path, capsys, mangle, message):
+    from imc_conformance.paths import imc_data
+    doc = json.loads(imc_data("cases", "200-LblRange.json").read_text())
+    mangle(doc)
+    (tmp_path / "200-LblRange.json").write_text(json.dumps(doc))
+    assert run("--vectors", str(tmp_path)) == 2
+    err = capsys.readouterr().err
+    assert "200-LblRange.json" in err and message in err
+
+
+def test_a_vector_file_that_is_not_json_says_where(tmp_path, capsys):
+    (tmp_path / "bad.json").write_text('{"cases": [\n  {"id": }\n]}')
+    assert main(["list", "--vectors", str(tmp_path)]) == 2
+    assert "bad.json: not JSON (line 2, column 10)" in capsys.readouterr().err
+
+
+def test_a_custom_vector_directory_runs(tmp_path, capsys):
+    from imc_conformance.paths import imc_data
+    (tmp_path / "200-LblRange.json").write_text(imc_data("cases", "200-LblRange.json").read_text())
+    assert run("--vectors", str(tmp_path)) == 0
+    assert "93 cases" in capsys.readouterr().out
