@@ -14,7 +14,6 @@ SCALAR_FORMATS = {
     "int8_t": "b", "uint8_t": "B", "int16_t": "h", "uint16_t": "H",
     "int32_t": "i", "uint32_t": "I", "int64_t": "q", "fp32_t": "f", "fp64_t": "d",
 }
-PREFIXED = ("plaintext", "rawdata", "message", "message-list")
 
 
 @dataclass(frozen=True)
@@ -66,9 +65,6 @@ class FieldDef:
         if self.type.startswith("u"):
             return 0, (1 << bits) - 1
         return -(1 << (bits - 1)), (1 << (bits - 1)) - 1
-
-    def values_in(self, edition: str) -> tuple[EnumValue, ...]:
-        return tuple(v for v in self.enum_values if v.in_edition(edition))
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from ..definitions import Definitions, load_definitions
+from ..definitions import Definitions, lint_definitions, load_definitions
 from ..paths import imc_data
 from .acceptable import add_acceptable
 from .coverage import coverage_markdown
@@ -60,7 +60,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", action="store_true", help="report files that differ from a fresh build; write nothing")
     args = parser.parse_args(argv)
     root = imc_data()
-    files = build_corpus(load_definitions())
+    defs = load_definitions()
+    for problem in lint_definitions(defs):  # reported, never "fixed": such values become acceptable encode cases
+        print(f"definitions: {problem}")
+    files = build_corpus(defs)
     drift = [name for name, text in files.items()
              if not (root / name).exists() or (root / name).read_text(encoding="utf-8") != text]
     stale = [p.relative_to(root).as_posix() for p in sorted((root / "cases").glob("*.json"))

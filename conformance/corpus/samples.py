@@ -27,8 +27,7 @@ def default_fields(mdef: MessageDef) -> dict:
 
 
 def message(abbrev: str, fields: dict, header: dict | None = None) -> dict:
-    m = {"abbrev": abbrev, "header": dict(header or {}), "fields": fields}
-    return m
+    return {"abbrev": abbrev, "header": dict(header or {}), "fields": fields}
 
 
 def inline(abbrev: str, fields: dict) -> dict:
