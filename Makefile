@@ -11,7 +11,7 @@ $(VENV)/.installed: pyproject.toml
 
 .PHONY: conformance test generate benchmark
 conformance: $(VENV)/.installed
-	$(VENV)/bin/imc-conformance run --adapter imcpy
+	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
 test: $(VENV)/.installed
 	$(VENV)/bin/python -m pytest
