@@ -313,6 +313,9 @@ class SubprocessSession:
         state = _RunState(iter(jobs))
         try:
             while state.has_work():
+                yield from state.drain()
+                if not state.needs_program():
+                    continue
                 if self._proc is None:
                     self._start()
                 self._send_what_fits(state)
@@ -376,7 +379,7 @@ class SubprocessSession:
         """Fail the blamed call, queue the other calls in flight for replay, restart the program."""
         if restart.blame is not None:
             state.inflight = {i: c for i, c in state.inflight.items() if c is not restart.blame}
-            yield restart.blame.job, restart.answer
+            yield from state.finish(restart.blame, restart.answer)
         for call in state.inflight.values():
             call.replayed = True
         state.replay.extendleft(reversed(list(state.inflight.values())))
@@ -396,20 +399,36 @@ class SubprocessSession:
 
 
 class _RunState:
-    """What one ``run`` has left to do: jobs not yet started, calls to replay, calls in flight."""
+    """What one ``run`` has left to do: jobs not yet started, calls to replay, calls in flight.
+
+    A roundtrip job reuses the answer to decoding the same frame when the run decodes it too (the
+    plan asks for decode-<order> before roundtrip-<order>): it waits, parked, for that answer and
+    then only the encode half is sent. Without such a decode, a roundtrip makes both calls itself.
+    """
 
     def __init__(self, jobs: Iterator[Job]):
         self.jobs = jobs
         self.ready: deque[_Call] = deque()  # second halves of roundtrips, sent before new jobs
         self.replay: deque[_Call] = deque()  # sent one at a time after a restart
         self.inflight: dict[int, _Call] = {}
+        self.finished: deque[tuple[Job, Answer]] = deque()  # answered without a call of their own
+        self.decoding: set[tuple[str, str]] = set()  # frames whose decode is queued or in flight
+        self.decoded: dict[tuple[str, str], Answer] = {}  # decode answers a later roundtrip will use
+        self.parked: dict[tuple[str, str], list[Job]] = {}  # roundtrips waiting for their decode answer
         self.last_answer = 0.0
         self.restarts = 0  # in a row, without an answer
         self._exhausted = False
 
+    def needs_program(self) -> bool:
+        return bool(self.inflight or self.replay or self.ready)
+
     def has_work(self) -> bool:
         self._pull()
-        return bool(self.inflight or self.replay or self.ready)
+        return bool(self.needs_program() or self.finished or self.parked)
+
+    def drain(self) -> Iterator[tuple[Job, Answer]]:
+        while self.finished:
+            yield self.finished.popleft()
 
     def next_call(self) -> _Call | None:
         self._pull()
@@ -417,33 +436,60 @@ class _RunState:
 
     def _pull(self) -> None:
         """Make the next job's first call ready if nothing else is."""
-        if not self.ready and not self._exhausted:
+        while not self.ready and not self._exhausted:
             job = next(self.jobs, None)
             if job is None:
                 self._exhausted = True
+                return
+            key = (job.case["id"], job.request.byte_order)
+            if job.request.op == "roundtrip" and key in self.decoded:
+                self._after_decode(job, self.decoded.pop(key))
+            elif job.request.op == "roundtrip" and key in self.decoding:
+                self.parked.setdefault(key, []).append(job)
             else:
+                if job.request.op == "decode" and "roundtrip" in job.case["checks"]:
+                    self.decoding.add(key)
                 self.ready.append(_first_call(job))
+
+    def _after_decode(self, job: Job, decoded: Answer) -> None:
+        """Continue a roundtrip with the implementation's decoding: encode it, or fail as the decode did."""
+        if decoded.kind == "ok":
+            body = {"op": "encode", "suite": job.suite, "message": decoded.message, "byte_order": job.request.byte_order}
+            self.ready.appendleft(_Call(job, body))
+        else:
+            self.finished.append((job, decoded))
 
     def answered(self) -> None:
         self.last_answer, self.restarts = time.monotonic(), 0
 
     def finish(self, call: _Call, answer: Answer) -> Iterator[tuple[Job, Answer]]:
-        """Yield the job's answer, or queue the encode half of a roundtrip whose decode succeeded."""
-        if call.then_encode and answer.kind == "ok":
-            body = {"op": "encode", "suite": call.job.suite, "message": answer.message,
-                    "byte_order": call.job.request.byte_order}
-            self.ready.appendleft(_Call(call.job, body))
-        else:
-            yield call.job, answer
+        """Yield the job's answer (releasing roundtrips that wait for it), or continue a roundtrip's decode half."""
+        if call.then_encode:
+            self._after_decode(call.job, answer)
+            return
+        job = call.job
+        key = (job.case["id"], job.request.byte_order)
+        if job.request.op == "decode" and key in self.decoding:
+            self.decoding.discard(key)
+            waiting = self.parked.pop(key, None)
+            if waiting:
+                for parked in waiting:
+                    self._after_decode(parked, answer)
+            else:
+                self.decoded[key] = answer
+        yield job, answer
 
     def abandon(self, reason: str) -> Iterator[tuple[Job, Answer]]:
         """Every job not yet answered fails with ``reason``."""
         answer = Answer("adapter-error", reason=reason)
-        pending = [*self.replay, *self.ready]
+        pending = [call.job for call in (*self.replay, *self.ready)]
+        pending += [job for jobs in self.parked.values() for job in jobs]
         self.replay.clear()
         self.ready.clear()
-        for call in pending:
-            yield call.job, answer
+        self.parked.clear()
+        yield from self.drain()
+        for job in pending:
+            yield job, answer
         for job in self.jobs:
             yield job, answer
         self._exhausted = True
