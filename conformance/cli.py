@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import fnmatch
 import importlib
 import importlib.util
 import json
@@ -12,7 +11,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from .corpus_data import CorpusError, load_cases
+from .corpus_data import CorpusError, load_cases, select_cases
 from .definitions import load_definitions
 from .evaluate import expectation
 from .results import FAILING, RunResult
@@ -80,18 +79,7 @@ def shim_argv(name: str) -> list[str]:
 
 
 def select(cases: list[dict], args) -> list[dict]:
-    out = []
-    for case in cases:
-        if expectation(case, args.edition) is None:
-            continue
-        if args.message and case["id"].split("/")[1] not in args.message:
-            continue
-        if args.id and not any(fnmatch.fnmatchcase(case["id"], g) for g in args.id):
-            continue
-        if args.tag and not set(args.tag) & set(case["tags"]):
-            continue
-        out.append(case)
-    return out
+    return select_cases(cases, args.edition, args.message, args.id, args.tag)
 
 
 def command_list(args) -> int:

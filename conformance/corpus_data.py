@@ -11,6 +11,7 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
+from .evaluate import expectation
 from .paths import imc_data
 
 CHECKS = {"encode-le", "encode-be", "decode-le", "decode-be", "roundtrip"}
@@ -101,6 +102,22 @@ def load_cases(directory: Path | None = None) -> list[dict]:
             raise CorpusError(f"{directory or imc_data('cases')}: the case id {case['id']} appears twice")
         seen.add(case["id"])
     return cases
+
+
+def select_cases(cases: list[dict], edition: str, messages=(), globs=(), tags=()) -> list[dict]:
+    """The cases of ``edition``, narrowed to these messages, id globs and tags (each when given)."""
+    out = []
+    for case in cases:
+        if expectation(case, edition) is None:
+            continue
+        if messages and case["id"].split("/")[1] not in messages:
+            continue
+        if globs and not any(fnmatch.fnmatchcase(case["id"], g) for g in globs):
+            continue
+        if tags and not set(tags) & set(case["tags"]):
+            continue
+        out.append(case)
+    return out
 
 
 @lru_cache(maxsize=None)

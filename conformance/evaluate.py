@@ -124,7 +124,7 @@ class Judge:
                                     self.reencoded(answer.message, request.byte_order))
             return CheckResult(check, Verdict.PASS, "decoded as expected")
         if answer.frame != expected:
-            return self.failure(check, self.frame_difference(expected, answer.frame), expected, answer.frame)
+            return self.failure(check, "", expected, answer.frame, locate=True)
         return CheckResult(check, Verdict.PASS, "frame matches" if request.op == "encode" else "re-encoded to the same frame")
 
     def _invalid(self, case, request, answer) -> CheckResult:
@@ -161,13 +161,22 @@ class Judge:
             if candidate and candidate.get(request.byte_order) == (answer.frame or b"").hex():
                 return CheckResult(check, Verdict.IMPL_DEFINED, f"{name}: {answer.frame.hex()[:64]}", name)
         reference = bytes.fromhex((frames.get("accept") or next(iter(frames.values()), {}))[request.byte_order])
-        return self.failure(check, "encoded to a frame no outcome permits: " + self.frame_difference(reference, answer.frame),
-                            reference, answer.frame)
+        return self.failure(check, "encoded to a frame no outcome permits: ", reference, answer.frame, locate=True)
 
-    def failure(self, check: str, detail: str, expected: bytes, actual: bytes | None) -> CheckResult:
-        """A FAIL that keeps both frames and the differing byte ranges, named by field."""
+    def failure(self, check: str, detail: str, expected: bytes, actual: bytes | None, locate: bool = False) -> CheckResult:
+        """A FAIL that keeps both frames and the differing byte ranges, named by field; ``locate`` adds where
+        the frames first differ to ``detail``. The expected frame is laid out once."""
+        spans = self._spans(expected) if actual is not None else []
+        if locate:
+            detail += self.frame_difference(expected, actual, spans)
         return CheckResult(check, Verdict.FAIL, detail, expected=expected.hex(),
-                           actual=None if actual is None else actual.hex(), diffs=self.byte_diffs(expected, actual))
+                           actual=None if actual is None else actual.hex(), diffs=self.byte_diffs(expected, actual, spans))
+
+    def _spans(self, frame: bytes) -> list:
+        try:
+            return layout(self.defs, frame)
+        except ValueError:  # an expected frame the codec cannot lay out (e.g. an out-of-type alternative)
+            return []
 
     def reencoded(self, message, byte_order: str) -> bytes | None:
         """The reference encoding of an implementation's decoded message, to show what it understood."""
@@ -176,14 +185,11 @@ class Judge:
         except (EncodeError, KeyError, TypeError, AttributeError):
             return None
 
-    def byte_diffs(self, expected: bytes, actual: bytes | None) -> tuple[ByteDiff, ...]:
-        """Runs of differing bytes, split at field boundaries of the expected frame."""
+    @staticmethod
+    def byte_diffs(expected: bytes, actual: bytes | None, spans: list) -> tuple[ByteDiff, ...]:
+        """Runs of differing bytes, split at the field boundaries (``spans``) of the expected frame."""
         if actual is None:
             return ()
-        try:
-            spans = layout(self.defs, expected)
-        except ValueError:
-            spans = []
         owner = {i: s.path for s in spans for i in range(s.start, s.end)}
         out: list[ByteDiff] = []
         for i in range(max(len(expected), len(actual))):
@@ -197,17 +203,15 @@ class Judge:
                 out.append(ByteDiff(i, i + 1, name))
         return tuple(out)
 
-    def frame_difference(self, expected: bytes, actual: bytes | None) -> str:
-        """Where two frames first differ, named by the field that owns the byte in the expected frame."""
+    @staticmethod
+    def frame_difference(expected: bytes, actual: bytes | None, spans: list) -> str:
+        """Where two frames first differ, named by the field (of ``spans``) that owns the byte in the expected frame."""
         if actual is None:
             return "no frame"
         first = next((i for i, (a, b) in enumerate(zip(expected, actual)) if a != b), min(len(expected), len(actual)))
         if first == len(expected) == len(actual):
             return "identical"
-        try:
-            owner = next((s for s in layout(self.defs, expected) if s.start <= first < s.end), None)
-        except ValueError:
-            owner = None
+        owner = next((s for s in spans if s.start <= first < s.end), None)
         where = f" = {owner.path} (bytes {owner.start}-{owner.end - 1})" if owner else ""
         return (f"{len(actual)} bytes, expected {len(expected)}; first difference at byte {first}{where}: "
                 f"expected {expected[first:first + 8].hex(' ')}, got {actual[first:first + 8].hex(' ')}")

@@ -7,16 +7,14 @@ records what the implementation did; NON_STRICT passes unless ``--conformance-st
 
 from __future__ import annotations
 
-import fnmatch
-
 import pytest
 
-from .corpus_data import load_cases
+from .corpus_data import load_cases, select_cases
 from .definitions import load_definitions
-from .evaluate import Judge, Verdict, expectation, plan, worst
+from .evaluate import Judge, Verdict, plan, worst
 from .library import ask
+from .results import FAILING
 
-FAILING = {Verdict.FAIL, Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR}
 
 
 def pytest_addoption(parser):
@@ -75,13 +73,7 @@ def pytest_collection_modifyitems(session, config, items):
         raise pytest.UsageError(str(exc)) from exc
     config.stash[_STATE] = {"adapter": adapter, "judge": Judge(load_definitions()),
                             "emits": set(adapter.hello().get("byte_orders", ()))}
-    edition = config.getoption("conformance_edition")
-    messages, globs = config.getoption("conformance_message"), config.getoption("conformance_id")
-    for case in load_cases():
-        if expectation(case, edition) is None:
-            continue
-        if messages and case["id"].split("/")[1] not in messages:
-            continue
-        if globs and not any(fnmatch.fnmatchcase(case["id"], g) for g in globs):
-            continue
+    selected = select_cases(load_cases(), config.getoption("conformance_edition"),
+                            config.getoption("conformance_message"), config.getoption("conformance_id"))
+    for case in selected:
         items.append(ConformanceCase.from_parent(session, name=case["id"], case=case))

@@ -117,37 +117,34 @@ def test_unknown_id_is_rejected_without_a_rule(imc):
     assert (caught.value.rule, caught.value.reason) == (None, "invalid message identification number: 999")
 
 
+def refusal_rule(imc, message) -> str | None:
+    """The rule named by imcpy's refusal to encode ``message`` (the encode must be refused)."""
+    with pytest.raises(Rejected) as caught:
+        imc.encode("imc", message, "le")
+    return caught.value.rule
+
+
 def test_value_out_of_type(imc):
     message = sample("AcousticStatus")
     message["fields"]["status"] = 666
-    with pytest.raises(Rejected) as caught:
-        imc.encode("imc", message, "le")
-    assert caught.value.rule == "value-out-of-type"
+    assert refusal_rule(imc, message) == "value-out-of-type"
     message = sample("LblRange")
     message["header"]["src"] = 0x10000
-    with pytest.raises(Rejected) as caught:
-        imc.encode("imc", message, "le")
-    assert caught.value.rule == "value-out-of-type"
+    assert refusal_rule(imc, message) == "value-out-of-type"
 
 
 @pytest.mark.parametrize("field, value", [("status", 1.5), ("info", 7), ("range", "fast"), ("range", [])])
 def test_value_type(imc, field, value):
     message = sample("AcousticStatus")
     message["fields"][field] = value
-    with pytest.raises(Rejected) as caught:
-        imc.encode("imc", message, "le")
-    assert caught.value.rule == "value-type"
+    assert refusal_rule(imc, message) == "value-type"
 
 
 def test_unknown_field_and_message(imc):
     message = sample("LblRange")
     message["fields"]["bogus"] = 1
-    with pytest.raises(Rejected) as caught:
-        imc.encode("imc", message, "le")
-    assert caught.value.rule == "unknown-field"
-    with pytest.raises(Rejected) as caught:
-        imc.encode("imc", {"abbrev": "NoSuchMessage", "fields": {}}, "le")
-    assert caught.value.rule == "unknown-message"
+    assert refusal_rule(imc, message) == "unknown-field"
+    assert refusal_rule(imc, {"abbrev": "NoSuchMessage", "fields": {}}) == "unknown-message"
     with pytest.raises(Unsupported):  # imcpy knows it, the definitions do not
         imc.encode("imc", {"abbrev": "EstimatedState", "fields": {}}, "le")
 

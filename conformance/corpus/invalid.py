@@ -12,6 +12,7 @@ import copy
 from .. import codec
 from ..codec import HEADER_SIZE
 from . import samples
+from .coverage import load_rules
 from .records import MessageCases
 from .surgery import flip, payload_of, read_u16, reframe, swapped_crc, u16, with_crc
 from .valid import first_variable_field, max_fill
@@ -22,6 +23,7 @@ HIGHEST_IMC_ID = 4095  # IMC.xml assigns no id above this (checked against IMC.x
 
 def add_invalid(mc: MessageCases) -> None:
     defs, mdef = mc.defs, mc.mdef
+    clauses = {r["id"]: r["clause"] for r in load_rules()}
     base = samples.message(mdef.abbrev, samples.filled_fields(defs, mdef),
                            {"timestamp": 1700000000.5, "src": 0x001E, "src_ent": 42, "dst": 0x4101, "dst_ent": 7})
     for order in ("le", "be"):
@@ -29,7 +31,7 @@ def add_invalid(mc: MessageCases) -> None:
         spans = codec.layout(defs, frame)
 
         def invalid(path, rule, broken, checks=None, message=None, **extra):
-            mc.add(f"{path}/{order}", expect="invalid", clause=RULE_CLAUSES[rule], checks=checks or [f"decode-{order}"],
+            mc.add(f"{path}/{order}", expect="invalid", clause=clauses[rule], checks=checks or [f"decode-{order}"],
                    tags=["invalid", f"rule:{rule}", f"byte-order:{order}"], frames={order: broken}, rule=rule,
                    message=message, **extra)
 
@@ -70,12 +72,6 @@ def add_invalid(mc: MessageCases) -> None:
         add_prefix_overruns(mc, invalid, base, order, spans)
 
 
-RULE_CLAUSES = {
-    "header-truncated": "imc-wire#frame-layout", "sync": "imc-wire#byte-order", "size-limit": "imc-wire#frame-layout",
-    "size-exceeds-data": "imc-wire#frame-layout", "crc": "imc-wire#crc", "unknown-id": "imc-wire#what-real-receivers-do",
-    "field-overrun": "imc-wire#what-real-receivers-do", "length-overrun": "imc-wire#field-types",
-    "list-count-overrun": "imc-wire#field-types", "unknown-inline-id": "imc-wire#field-types",
-}
 
 
 def boundaries(spans, length: int):
