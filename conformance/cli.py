@@ -5,8 +5,11 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import importlib
+import importlib.metadata
 import importlib.util
+import inspect
 import json
+import math
 import shlex
 import sys
 from pathlib import Path
@@ -14,7 +17,8 @@ from pathlib import Path
 from .corpus_data import CorpusError, load_cases, select_cases
 from .definitions import load_definitions
 from .evaluate import expectation
-from .results import FAILING, RunResult
+from .render.common import printable
+from .results import RunResult, failing
 from .session import AdapterStartError
 
 LIBRARY_ADAPTERS = {
@@ -46,25 +50,47 @@ def load_library_adapter(spec: str):
             spec_.loader.exec_module(module)
         else:
             module = importlib.import_module(target)
-        factory = getattr(module, attr)
-        return factory if hasattr(factory, "decode") else factory()
+        target_ = getattr(module, attr)
     except UsageError:
         raise
     except Exception as exc:
         raise UsageError(f"cannot load adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
+    if hasattr(target_, "decode") and not inspect.isclass(target_):
+        return target_
+    if not callable(target_):
+        raise UsageError(f"adapter {spec!r} is a {type(target_).__name__}: expected an adapter object, "
+                         "a class or a factory")
+    try:  # a class or a zero-argument factory
+        return target_()
+    except Exception as exc:
+        raise UsageError(f"cannot create the adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
 
 
-def open_session(args):
-    """The session for --adapter / --adapter-cmd."""
+def adapter_choice(args) -> tuple[str, list[str] | None]:
+    """The adapter's name and, for a subprocess adapter, its argv; usage errors for an ambiguous choice."""
+    if args.adapter_cmd is None:
+        return args.adapter or "imcpy", shim_argv(args.adapter) if args.adapter in SHIMS else None
+    if args.adapter is not None:
+        raise UsageError("give either --adapter or --adapter-cmd, not both")
+    try:
+        argv = shlex.split(args.adapter_cmd)
+    except ValueError as exc:
+        raise UsageError(f"--adapter-cmd cannot be split: {exc}") from exc
+    if not argv:
+        raise UsageError("--adapter-cmd is empty (an unset variable?): give the adapter program to run")
+    return args.adapter_cmd, argv
+
+
+def open_session(name: str, argv: list[str] | None, timeout: float):
+    """The session for the chosen adapter: a subprocess when there is an argv, else a library adapter."""
     from .library import LibrarySession
 
-    if args.adapter_cmd or args.adapter in SHIMS:
+    if argv is not None:
         from .subprocess_session import SubprocessSession
 
-        argv = shlex.split(args.adapter_cmd) if args.adapter_cmd else shim_argv(args.adapter)
-        return SubprocessSession(argv, name=args.adapter_cmd or args.adapter, timeout=args.timeout,
-                                 hello_timeout=max(30.0, args.timeout))  # start-up (a JVM, class generation) takes longer
-    return LibrarySession(load_library_adapter(args.adapter), args.adapter)
+        return SubprocessSession(argv, name=name, timeout=timeout,
+                                 hello_timeout=max(30.0, timeout))  # start-up (a JVM, class generation) takes longer
+    return LibrarySession(load_library_adapter(name), name)
 
 
 def shim_argv(name: str) -> list[str]:
@@ -73,12 +99,16 @@ def shim_argv(name: str) -> list[str]:
         shim = Path(importlib.import_module("imc_conformance.adapters").__file__).parent / SHIMS[name]
     argv = [sys.executable, str(shim)]
     if name == "pyimclsts-shim":
-        from .imc_xml import cache_dir, fetch_imc_xml
+        from .cache import cache_dir
+        from .imc_xml import fetch_imc_xml
         argv += ["--imc-xml", str(fetch_imc_xml()), "--cache", str(cache_dir() / "pyimclsts-shim")]
     return argv
 
 
 def select(cases: list[dict], args) -> list[dict]:
+    unknown = set(args.message) - set(load_definitions().by_abbrev)
+    if unknown:
+        raise UsageError(f"unknown message(s): {', '.join(sorted(unknown))}")
     return select_cases(cases, args.edition, args.message, args.id, args.tag)
 
 
@@ -92,14 +122,13 @@ def command_run(args) -> int:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
-    from .render_terminal import print_result
+    from .render.terminal import print_result
     from .runner import run_cases
     from .waivers import WaiverError, load_waivers
 
+    name, argv = adapter_choice(args)
+    targets = report_targets(args)
     defs = load_definitions()
-    unknown = set(args.message) - set(defs.by_abbrev)
-    if unknown:
-        raise UsageError(f"unknown message(s): {', '.join(sorted(unknown))}")
     everything = load_cases(args.vectors)
     cases = select(everything, args)
     if not cases:
@@ -111,50 +140,77 @@ def command_run(args) -> int:
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
     console = terminal()
-    session = open_session(args)
+    session = open_session(name, argv, args.timeout)
     try:
         with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       console=Console(stderr=True), transient=True, disable=args.no_progress) as bar:
             task = bar.add_task("running", total=None)
-            result = run_cases(session, cases, defs=defs, edition=args.edition, adapter=args.adapter_cmd or args.adapter,
-                               waivers=waivers, strict=args.strict, notes=notes,
-                               progress=lambda n: bar.update(task, completed=n))
+            result = run_cases(session, cases, defs=defs, edition=args.edition, adapter=name, waivers=waivers,
+                               strict=args.strict, notes=notes, progress=lambda n: bar.update(task, completed=n))
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
     finally:
         session.close()
     print_result(result, console)
-    write_reports(result, args)
+    problems = write_reports(result, targets, console)
     if args.write_waivers:
         from .waivers import waivers_document
-        failing = [c.id for c in result.cases if c.verdict in FAILING]
+        failing_ids = [c.id for c in result.cases if failing(c.verdict, strict=False)]
         reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
-        Path(args.write_waivers).write_text(json.dumps(waivers_document(failing, reason), indent=1) + "\n", encoding="utf-8")
-        console.print(f"wrote {len(failing)} waivers to {args.write_waivers}")
-    return result.exit_code()
+        problems += write_file(Path(args.write_waivers), json.dumps(waivers_document(failing_ids, reason), indent=1) + "\n",
+                               f"waivers file ({len(failing_ids)} waivers)", console)
+    if not result.complete:
+        print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
+        return result.exit_code()
+    return 2 if problems else result.exit_code()
 
 
-def write_reports(result: RunResult, args) -> None:
-    targets = {fmt: getattr(args, fmt) for fmt in REPORTS if getattr(args, fmt)}
+def report_targets(args) -> dict[str, Path]:
+    """The requested reports by format; two formats to one file is a usage error."""
+    targets = {fmt: Path(getattr(args, fmt)) for fmt in REPORTS if getattr(args, fmt)}
+    seen: dict[Path, str] = {}
+    for fmt, path in targets.items():
+        key = path.resolve()
+        if key in seen:
+            raise UsageError(f"--{seen[key]} and --{fmt} write to the same file {path}")
+        seen[key] = fmt
+    return targets
+
+
+def write_reports(result: RunResult, targets: dict[str, Path], console) -> int:
+    """Write each requested report and say where; a report that cannot be written is reported and skipped.
+    Returns the number of reports that could not be written."""
     if not targets:
-        return
+        return 0
     from .render import RENDERERS
 
-    for fmt, target in targets.items():
-        Path(target).parent.mkdir(parents=True, exist_ok=True)
-        Path(target).write_text(RENDERERS[fmt](result), encoding="utf-8")
+    return sum(write_file(path, RENDERERS[fmt](result), f"{fmt} report", console) for fmt, path in targets.items())
+
+
+def write_file(path: Path, text: str, what: str, console) -> int:
+    """Write ``text`` to ``path`` (creating its folder) and say so; 1 after a one-line error if that fails."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        print(f"imc-conformance: cannot write the {what} to {printable(str(path))}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return 1
+    console.print(f"{what}: {printable(str(path))}", highlight=False, markup=False)
+    return 0
 
 
 def command_report(args) -> int:
-    from .render_terminal import print_result
+    from .render.terminal import print_result
 
+    targets = report_targets(args)
     try:
         result = RunResult.from_dict(json.loads(Path(args.result).read_text(encoding="utf-8")))
-    except (OSError, ValueError, KeyError) as exc:
+    except (OSError, ValueError) as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
         raise UsageError(f"cannot read result {args.result}: {exc}") from exc
-    print_result(result, terminal())
-    write_reports(result, args)
-    return result.exit_code()
+    console = terminal()
+    print_result(result, console)
+    return 2 if write_reports(result, targets, console) else result.exit_code()
 
 
 def terminal():
@@ -162,6 +218,16 @@ def terminal():
     from rich.console import Console
 
     return Console(highlight=False, width=None if sys.stdout.isatty() else 160)
+
+
+def positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a positive, finite number of seconds")
+    return value
 
 
 def add_selection(parser) -> None:
@@ -185,14 +251,17 @@ def build_parser() -> argparse.ArgumentParser:
                     "Start with: imc-conformance run --adapter imcpy",
         epilog="Exit codes: 0 every message passes, 1 a failure (FAIL, CRASH, TIMEOUT, WAIVER_STALE; NON_STRICT with "
                "--strict), 2 a usage or adapter error.")
+    parser.add_argument("--version", action="version",
+                        version=f"imc-conformance {importlib.metadata.version('imc-conformance')}")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run the corpus against an implementation")
-    run.add_argument("--adapter", default="imcpy",
-                     help="library adapter: imcpy (default), pyimclsts, module:attribute or file.py:attribute; "
-                          "subprocess shims: imcpy-shim, pyimclsts-shim")
+    run.add_argument("--adapter", help="library adapter: imcpy (the default), pyimclsts, module:attribute or "
+                                       "file.py:attribute (an object, a class or a factory); subprocess shims: "
+                                       "imcpy-shim, pyimclsts-shim")
     run.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter speaking JSON lines (adapters/README.md); "
                                                           "split like a shell would, but never run by one")
-    run.add_argument("--timeout", type=float, default=5.0, help="seconds per request for subprocess adapters (default 5)")
+    run.add_argument("--timeout", type=positive_seconds, default=5.0,
+                     help="seconds per request for subprocess adapters (default 5)")
     add_selection(run)
     run.add_argument("--strict", action="store_true", help="NON_STRICT verdicts fail too")
     run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids with a reason and optional expiry")
@@ -218,8 +287,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except (UsageError, CorpusError) as exc:
-        print(f"imc-conformance: {exc}", file=sys.stderr)
+        print(f"imc-conformance: {printable(str(exc))}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # before any case ran (loading, starting the adapter): nothing to report
+        print("imc-conformance: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # output piped into head(1) and the like
         sys.stderr.close()
         return 0

@@ -9,10 +9,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .decoded_form import HEADER
 from .definitions import Definitions, FieldDef, MessageDef
 from .values import float_to_bits, raw_bytes, text_bytes
-
-HEADER_TYPES = {"timestamp": "fp64_t", "src": "uint16_t", "src_ent": "uint8_t", "dst": "uint16_t", "dst_ent": "uint8_t"}
 
 
 @dataclass(frozen=True)
@@ -36,10 +35,7 @@ class Comparator:
     def __init__(self, defs: Definitions):
         self.defs = defs
         self._checkers: dict[str, list] = {}
-        header = MessageDef(id=-1, abbrev="header", name="header", clause="imc-wire#frame-layout", min_payload=0,
-                            fields=tuple(FieldDef(abbrev=k, name=k, type=t, clause="imc-wire#frame-layout")
-                                         for k, t in HEADER_TYPES.items()))
-        self._header = self._build(header)
+        self._header = self._build(HEADER)
 
     def messages(self, expected: dict, actual, *, nan_payload: bool = False) -> list[Difference]:
         out: list[Difference] = []
@@ -64,21 +60,6 @@ class Comparator:
             checkers = self._checkers[abbrev] = self._build(self.defs[abbrev])
         self._check(checkers, expected, actual, path, nan_payload, out)
 
-    def unknown_messages(self, value) -> list[str]:
-        """Message names in an answer that no definition has (an adapter error, not the implementation's)."""
-        found: list[str] = []
-        stack = [value]
-        while stack:
-            item = stack.pop()
-            if isinstance(item, dict):
-                abbrev = item.get("abbrev")
-                if "fields" in item and not (isinstance(abbrev, str) and abbrev in self.defs.by_abbrev):
-                    found.append(repr(abbrev)[:100])
-                stack.extend(item.values())
-            elif isinstance(item, list):
-                stack.extend(item)
-        return found
-
     @staticmethod
     def _check(checkers, expected: dict, actual: dict, path: str, nan_payload: bool, out: list, extra_ok=False) -> None:
         for name, check in checkers:
@@ -101,7 +82,9 @@ class Comparator:
 
             def check_float(e, a, path, nan_payload, out):
                 if not _same_float(e, a, width, nan_payload):
-                    out.append(Difference(path, e, a, type_))
+                    pinned = nan_payload and a == "nan" and isinstance(e, str) and e.startswith("nan:")
+                    out.append(Difference(path, e, a, type_ + ('; this case pins the NaN\'s bits: answer "nan:<hex>"'
+                                                               if pinned else "")))
             return check_float
         if f.is_int:
             type_ = f.type

@@ -1,93 +1,96 @@
 """Read the corpus: vector files, rules and errata.
 
-Loading checks the structure the runner relies on and names the file and JSON path of anything
-malformed; the full JSON Schema lint of the corpus runs in the project's tests, not on every run.
+Loading validates every vector file against its JSON Schema (remembered per file content in the cache,
+since the schema check of the whole corpus takes seconds) and every message in it against the
+definitions, and names the file and JSON path of the first problem.
 """
 
 from __future__ import annotations
 
 import fnmatch
 import json
-from functools import lru_cache
+from functools import cache, lru_cache
 from pathlib import Path
 
-from .evaluate import expectation
-from .paths import imc_data
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import best_match
 
-CHECKS = {"encode-le", "encode-be", "decode-le", "decode-be", "roundtrip"}
-EXPECTS = {"valid", "invalid", "acceptable"}
+from .cache import remembered
+from .decoded_form import message_problem
+from .definitions import load_definitions
+from .evaluate import expectation
+from .paths import VECTORS, imc_data
+
 
 
 class CorpusError(ValueError):
     """A vector file the runner cannot use; the message names the file and the JSON path."""
 
 
+SCHEMA = VECTORS / "schema" / "vectors.schema.json"
+
+
+@cache
+def _schema() -> tuple[bytes, Draft202012Validator]:
+    raw = SCHEMA.read_bytes()
+    return raw, Draft202012Validator(json.loads(raw))
+
+
 def read_vector_file(path: Path) -> dict:
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        raw = path.read_bytes()
+        doc = json.loads(raw)
     except json.JSONDecodeError as exc:
         raise CorpusError(f"{path}: not JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from exc
     except (OSError, UnicodeDecodeError) as exc:
         raise CorpusError(f"{path}: cannot read: {exc}") from exc
     if not isinstance(doc, dict) or not isinstance(doc.get("cases"), list):
         raise CorpusError(f"{path}: $.cases: expected an array of cases")
+    schema_raw, validator = _schema()
+    known, record = remembered("vector-schema", schema_raw, raw)
+    if not known:
+        error = best_match(validator.iter_errors(doc))
+        if error is not None:
+            raise CorpusError(f"{path}: {error.json_path}: {shorten(error.message)}")
+        record()
+    defs = load_definitions()
     for i, case in enumerate(doc["cases"]):
-        problem = case_problem(case)
+        problem = message_problem_of(defs, case)
         if problem:
             where, what = problem
             raise CorpusError(f"{path}: $.cases[{i}]{where}: {what}")
     return doc
 
 
-def case_problem(case) -> tuple[str, str] | None:
-    """(JSON path suffix, problem) for the first structural problem of a case, or None."""
-    if not isinstance(case, dict):
-        return "", "expected an object"
-    if not isinstance(case.get("id"), str) or not case["id"].startswith("imc/") or case["id"].count("/") < 2:
-        return ".id", "expected an id like imc/<Message>/<...>"
-    expect = case.get("expect")
-    values = [expect] if isinstance(expect, str) else list(expect.values()) if isinstance(expect, dict) else [None]
-    if not values or any(v not in EXPECTS for v in values):
-        return ".expect", f"expected one of {sorted(EXPECTS)} or an object of them per edition, got {expect!r}"
-    if not isinstance(case.get("clause"), str):
-        return ".clause", "expected a string"
-    checks = case.get("checks")
-    if not isinstance(checks, list) or not checks or not set(checks) <= CHECKS:
-        return ".checks", f"expected a non-empty array of {sorted(CHECKS)}"
-    frames = case.get("frames", {})
-    if not isinstance(frames, dict):
-        return ".frames", "expected an object"
-    for order, frame in frames.items():
-        if order not in ("le", "be") or not is_hex(frame):
-            return f".frames.{order}", "expected hex bytes under 'le' or 'be'"
-    for check in checks:
-        op, _, order = check.partition("-")
-        if op in ("decode", "roundtrip") and order and order not in frames:
-            return ".frames", f"check {check} needs a frame in byte order {order}"
-        if op in ("encode", "roundtrip") and not isinstance(case.get("message"), dict) and "invalid" not in values:
-            return ".message", f"check {check} needs a message"
-    if "invalid" in values and not isinstance(case.get("rule"), str):
-        return ".rule", "an invalid case names the rule it breaks"
-    if "acceptable" in values and not isinstance(case.get("outcomes"), list):
-        return ".outcomes", "an acceptable case lists its permitted outcomes"
-    return None
+def shorten(text: str, limit: int = 240) -> str:
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
-def is_hex(text) -> bool:
-    """Even-length hex without spaces (bytes.fromhex checks the digits at C speed)."""
-    if not isinstance(text, str) or " " in text:
-        return False
-    try:
-        bytes.fromhex(text)
-    except ValueError:
-        return False
-    return True
+def message_problem_of(defs, case: dict) -> tuple[str, str] | None:
+    """The first problem of the case's message against the definitions (a decoded form needs its whole header)."""
+    if "message" not in case:
+        return None
+    expects = {case["expect"]} if isinstance(case["expect"], str) else set(case["expect"].values())
+    decoded = expects & {"valid", "acceptable"} and any(c.startswith(("decode", "roundtrip")) for c in case["checks"])
+    problem = message_problem(defs, case["message"], whole_header=bool(decoded), in_range=True)
+    return None if problem is None else (".message" + problem[0], problem[1])
+
+
+def cases_folder(directory: Path | None) -> Path:
+    """The folder of vector files: the corpus's, or ``directory`` given as a suite folder (holding cases/) or as
+    the cases folder itself."""
+    if directory is None:
+        return imc_data("cases")
+    folder = Path(directory)
+    if not folder.is_dir():
+        raise CorpusError(f"{folder}: {'not a directory' if folder.exists() else 'no such directory'}")
+    return folder / "cases" if (folder / "cases").is_dir() else folder
 
 
 @lru_cache(maxsize=None)
 def vector_files(directory: Path | None = None) -> tuple[tuple[str, dict], ...]:
     """(file name, parsed document) for every vector file of ``directory`` (default: the corpus), in name order."""
-    folder = Path(directory) if directory else imc_data("cases")
+    folder = cases_folder(directory)
     paths = sorted(folder.glob("*.json"))
     if not paths:
         raise CorpusError(f"{folder}: no vector files (*.json)")
@@ -99,7 +102,7 @@ def load_cases(directory: Path | None = None) -> list[dict]:
     seen: set[str] = set()
     for case in cases:
         if case["id"] in seen:
-            raise CorpusError(f"{directory or imc_data('cases')}: the case id {case['id']} appears twice")
+            raise CorpusError(f"{cases_folder(directory)}: the case id {case['id']} appears twice")
         seen.add(case["id"])
     return cases
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cache, cached_property
 from pathlib import Path
 
 from .paths import imc_data
@@ -153,6 +153,7 @@ def parse_definitions(raw: dict) -> Definitions:
     )
 
 
+@cache
 def load_definitions(path: Path | None = None) -> Definitions:
     path = path or imc_data("definitions.json")
     return parse_definitions(json.loads(Path(path).read_text(encoding="utf-8")))

@@ -12,6 +12,7 @@ from enum import Enum
 
 from .codec import EncodeError, encode, layout
 from .compare import Comparator
+from .decoded_form import message_problem
 from .definitions import Definitions
 
 
@@ -44,6 +45,7 @@ class Answer:
     message: dict | None = None
     reason: str = ""
     rule: str | None = None
+    note: str = ""  # how the answer was obtained, when that matters (e.g. replayed after a protocol violation)
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,7 @@ class CheckResult:
     expected: str | None = None  # hex frames, kept for failures so reports can show them side by side
     actual: str | None = None
     diffs: tuple[ByteDiff, ...] = ()
+    note: str | None = None  # a remark on how the answer was obtained (Answer.note)
 
 
 FAILURE_KINDS = {"crash": Verdict.CRASH, "timeout": Verdict.TIMEOUT, "adapter-error": Verdict.ADAPTER_ERROR,
@@ -93,15 +96,27 @@ def plan(case: dict, edition: str, emits: set[str]) -> list[Request]:
 
 
 class Judge:
-    """Turns answers into verdicts for cases of one definitions set."""
+    """Turns answers into verdicts for cases of one definitions set and its rules."""
 
-    def __init__(self, defs: Definitions):
+    def __init__(self, defs: Definitions, rules: frozenset[str] | None = None):
+        from .corpus.coverage import load_rules
+
         self.defs = defs
+        self.rules = rules if rules is not None else frozenset(r["id"] for r in load_rules())
         self.compare = Comparator(defs)
 
     def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult:
+        result = self._judge(case, edition, request, answer)
+        if answer.note:
+            result.note = answer.note
+        return result
+
+    def _judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult:
         if answer.kind in FAILURE_KINDS:
             return CheckResult(request.check, FAILURE_KINDS[answer.kind], answer.reason)
+        if answer.kind == "rejected" and answer.rule is not None and answer.rule not in self.rules:
+            return CheckResult(request.check, Verdict.ADAPTER_ERROR, f"the refusal names the rule {answer.rule[:80]!r}, "
+                               f"which rules.json does not have: {answer.reason}")
         expect = expectation(case, edition)
         if expect == "valid":
             return self._valid(case, request, answer)
@@ -117,8 +132,8 @@ class Judge:
         if request.op == "decode":
             diffs = self.compare.messages(case["message"], answer.message,
                                           nan_payload=case.get("compare", {}).get("nan_payload", False))
-            if diffs and (unknown := self.compare.unknown_messages(answer.message)):
-                return CheckResult(check, Verdict.ADAPTER_ERROR, f"the answer names unknown message(s) {', '.join(unknown)}")
+            if diffs and (malformed := self.malformed(answer.message)):
+                return CheckResult(check, Verdict.ADAPTER_ERROR, malformed)
             if diffs:
                 return self.failure(check, "; ".join(str(d) for d in diffs[:5]), expected,
                                     self.reencoded(answer.message, request.byte_order))
@@ -149,8 +164,8 @@ class Judge:
         if request.op == "decode":
             diffs = self.compare.messages(case["message"], answer.message,
                                           nan_payload=case.get("compare", {}).get("nan_payload", False))
-            if diffs and (unknown := self.compare.unknown_messages(answer.message)):
-                return CheckResult(check, Verdict.ADAPTER_ERROR, f"the answer names unknown message(s) {', '.join(unknown)}")
+            if diffs and (malformed := self.malformed(answer.message)):
+                return CheckResult(check, Verdict.ADAPTER_ERROR, malformed)
             if not diffs and "accept" in permitted:
                 return CheckResult(check, Verdict.IMPL_DEFINED, "accepted", "accept")
             expected = bytes.fromhex(case["frames"][request.byte_order])
@@ -162,6 +177,11 @@ class Judge:
                 return CheckResult(check, Verdict.IMPL_DEFINED, f"{name}: {answer.frame.hex()[:64]}", name)
         reference = bytes.fromhex((frames.get("accept") or next(iter(frames.values()), {}))[request.byte_order])
         return self.failure(check, "encoded to a frame no outcome permits: ", reference, answer.frame, locate=True)
+
+    def malformed(self, message) -> str | None:
+        """Why an answered message is not a well-formed decoded form (the adapter's fault), or None."""
+        problem = message_problem(self.defs, message, whole_header=True, in_range=False)
+        return None if problem is None else f"malformed answer: message{problem[0]}: {problem[1]}"
 
     def failure(self, check: str, detail: str, expected: bytes, actual: bytes | None, locate: bool = False) -> CheckResult:
         """A FAIL that keeps both frames and the differing byte ranges, named by field; ``locate`` adds where

@@ -6,7 +6,6 @@ Never committed: ``pip download`` brings the sdist, the XML is extracted into th
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 import tarfile
@@ -14,15 +13,10 @@ import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from .cache import cache_dir
+
 IMCPY_VERSION = "1.1.2"
 _MEMBER = f"imcpy-{IMCPY_VERSION}/imc/IMC.xml"
-
-
-def cache_dir() -> Path:
-    root = os.environ.get("IMC_CONFORMANCE_CACHE") or Path.home() / ".cache" / "imc-conformance"
-    path = Path(root)
-    path.mkdir(parents=True, exist_ok=True)
-    return path
 
 
 def fetch_imc_xml(timeout: float = 300) -> Path:

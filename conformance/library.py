@@ -6,7 +6,7 @@ from typing import Iterable, Iterator
 
 from .adapter_api import Rejected, Unsupported
 from .evaluate import Answer, Request
-from .session import Job
+from .session import AdapterStartError, Job
 
 
 def _call(fn, *args) -> Answer:
@@ -46,11 +46,16 @@ class LibrarySession:
     answer to decoding the same frame (roundtrip is encode(decode(frame))).
     """
 
+    incidents: tuple = ()  # an in-process adapter cannot break the protocol
+
     def __init__(self, adapter, name: str):
         self.adapter, self.name = adapter, name
 
-    def hello(self) -> dict:
-        return self.adapter.hello()
+    def hello(self):
+        try:
+            return self.adapter.hello()
+        except Exception as exc:  # any failure of the adapter's own hello
+            raise AdapterStartError(f"the adapter's hello failed: {type(exc).__name__}: {exc}") from exc
 
     def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
         decoded: dict[tuple[str, str], Answer] = {}

@@ -1,19 +1,49 @@
 """The one result model every report renders: a run, its messages, their cases and checks.
 
 ``RunResult.to_dict()`` is the versioned JSON document (schema: ``vectors/schema/result.schema.json``);
-``RunResult.from_dict()`` reads it back so ``imc-conformance report`` can re-render a saved run.
+``RunResult.from_dict()`` reads it back, in this format or an older one, so ``imc-conformance report`` can
+re-render a saved run.
 """
 
 from __future__ import annotations
 
+import json
+import re
 from collections import Counter
 from dataclasses import asdict, dataclass, field
+from functools import cache
+
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import best_match
 
 from .evaluate import ByteDiff, CheckResult, Verdict
+from .paths import VECTORS
 
-FORMAT = "imc-conformance-result/1"
+FORMAT_NAME = "imc-conformance-result"
+VERSION = 2
+FORMAT = f"{FORMAT_NAME}/{VERSION}"
+SCHEMAS = {1: "result-1.schema.json", 2: "result.schema.json"}
+INTERRUPTED = 130  # the exit code of a run stopped by Ctrl-C, as shells report SIGINT
 # A message fails if any case has one of these; NON_STRICT joins them under --strict.
 FAILING = (Verdict.FAIL, Verdict.CRASH, Verdict.TIMEOUT, Verdict.WAIVER_STALE, Verdict.ADAPTER_ERROR)
+
+
+def failing(verdict: Verdict, strict: bool) -> bool:
+    """The one definition of a failing verdict: FAILING, and NON_STRICT under --strict."""
+    return verdict in FAILING or (strict and verdict is Verdict.NON_STRICT)
+
+
+@dataclass
+class Incident:
+    """Something the adapter did that no single case is to blame for, answered by restarting it and replaying.
+
+    ``kind``: ``protocol`` (it broke the adapter protocol: the run exits 2) or ``crash`` (it died or
+    stopped answering, yet each request then succeeded alone: the run exits 1). ``cases``: those in flight.
+    """
+
+    kind: str
+    reason: str
+    cases: list[str]
 
 
 @dataclass
@@ -27,6 +57,10 @@ class CaseResult:
     rule: str | None = None
     errata: list[str] = field(default_factory=list)  # implementation errata that explain a failure
     waiver: str | None = None  # the waiver's reason, when one applies
+
+    @property
+    def notes(self) -> list[str]:
+        return list(dict.fromkeys(c.note for c in self.checks if c.note))
 
     @property
     def detail(self) -> str:
@@ -61,6 +95,9 @@ class RunResult:
     messages: list[MessageResult]
     stderr: str = ""
     notes: list[str] = field(default_factory=list)
+    complete: bool = True  # False when the run was interrupted: only the cases done so far are in it
+    incidents: list[Incident] = field(default_factory=list)
+    untested: list[str] = field(default_factory=list)  # check kinds the adapter's hello ruled out entirely
 
     @property
     def cases(self) -> list[CaseResult]:
@@ -72,36 +109,69 @@ class RunResult:
         return {v.value: counts[v.value] for v in Verdict if counts[v.value]}
 
     def exit_code(self) -> int:
-        """2 for an adapter error, else 1 for any failing verdict, else 0."""
+        """130 if interrupted; else 2 for an adapter error or protocol violation; else 1 for a failing verdict
+        (or, under --strict, a check kind left untested); else 0."""
+        if not self.complete:
+            return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
-        if Verdict.ADAPTER_ERROR in verdicts:
+        if Verdict.ADAPTER_ERROR in verdicts or any(i.kind == "protocol" for i in self.incidents):
             return 2
-        failing = set(FAILING) | ({Verdict.NON_STRICT} if self.strict else set())
-        return 1 if verdicts & failing else 0
+        if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested):
+            return 1
+        return 0
 
     def to_dict(self) -> dict:
         return {
             "format": FORMAT, "suite": self.suite, "edition": self.edition, "implementation": self.implementation,
             "adapter": self.adapter, "strict": self.strict, "started": self.started, "duration": round(self.duration, 3),
-            "summary": self.summary, "exit_code": self.exit_code(), "notes": self.notes, "stderr": self.stderr,
+            "complete": self.complete, "summary": self.summary, "exit_code": self.exit_code(), "notes": self.notes,
+            "untested": self.untested, "incidents": [asdict(i) for i in self.incidents], "stderr": self.stderr,
             "messages": [{"name": m.name, "id": m.id, "verdict": m.verdict,
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
                           "cases": [case_dict(c) for c in m.cases]} for m in self.messages],
         }
 
     @classmethod
-    def from_dict(cls, doc: dict) -> RunResult:
-        if doc.get("format") != FORMAT:
-            raise ValueError(f"not an imc-conformance result (format {doc.get('format')!r}, expected {FORMAT!r})")
+    def from_dict(cls, doc) -> RunResult:
+        """A result read back from its JSON document (any format version this code knows); raises ValueError
+        naming the JSON path of the first problem."""
+        version = format_version(doc)
+        error = best_match(result_validator(version).iter_errors(doc))
+        if error is not None:
+            raise ValueError(f"{error.json_path}: {error.message[:240]}")
         messages = [MessageResult(m["name"], m["id"], m["verdict"], [case_from(c, m["name"]) for c in m["cases"]])
                     for m in doc["messages"]]
         return cls(doc["suite"], doc["edition"], doc["implementation"], doc["adapter"], doc["strict"], doc["started"],
-                   doc["duration"], messages, doc.get("stderr", ""), doc.get("notes", []))
+                   doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
+                   [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []))
+
+
+def format_version(doc) -> int:
+    """The format version of a result document (the current one when it names none, so that the schema
+    says what is missing); raises ValueError for a document of another tool or of a newer version."""
+    fmt = doc.get("format") if isinstance(doc, dict) else None
+    if fmt is None:
+        return VERSION
+    match = re.fullmatch(re.escape(FORMAT_NAME) + r"/(\d+)", fmt) if isinstance(fmt, str) else None
+    if match is None:
+        raise ValueError(f"not an imc-conformance result (format {str(fmt)[:80]!r}, expected {FORMAT!r})")
+    version = int(match[1])
+    if version > VERSION:
+        raise ValueError(f"written by a newer version of imc-conformance (format {fmt}); this version reads "
+                         f"formats {min(SCHEMAS)} to {VERSION}")
+    if version not in SCHEMAS:
+        raise ValueError(f"unknown result format {fmt}")
+    return version
+
+
+@cache
+def result_validator(version: int) -> Draft202012Validator:
+    schema = json.loads((VECTORS / "schema" / SCHEMAS[version]).read_text(encoding="utf-8"))
+    return Draft202012Validator(schema)
 
 
 def message_verdict(cases: list[CaseResult], strict: bool) -> str:
-    failing = set(FAILING) | ({Verdict.NON_STRICT} if strict else set())
-    return "FAIL" if any(c.verdict in failing for c in cases) else "PASS"
+    return "FAIL" if any(failing(c.verdict, strict) for c in cases) else "PASS"
 
 
 def case_dict(c: CaseResult) -> dict:
@@ -114,7 +184,7 @@ def case_dict(c: CaseResult) -> dict:
         out["waiver"] = c.waiver
     out["checks"] = []
     for k in c.checks:
-        check = {key: value for key, value in asdict(k).items() if value not in (None, ())}
+        check = {key: list(value) if key == "diffs" else value for key, value in asdict(k).items() if value not in (None, ())}
         check["verdict"] = k.verdict.value
         out["checks"].append(check)
     return out
@@ -122,6 +192,6 @@ def case_dict(c: CaseResult) -> dict:
 
 def case_from(d: dict, message: str) -> CaseResult:
     checks = [CheckResult(k["check"], Verdict(k["verdict"]), k["detail"], k.get("outcome"), k.get("expected"), k.get("actual"),
-                          tuple(ByteDiff(**b) for b in k.get("diffs", ()))) for k in d["checks"]]
+                          tuple(ByteDiff(**b) for b in k.get("diffs", ())), k.get("note")) for k in d["checks"]]
     return CaseResult(d["id"], message, Verdict(d["verdict"]), d["expect"], d["clause"], checks, d.get("rule"),
                       d.get("errata", []), d.get("waiver"))

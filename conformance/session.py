@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Iterable, Iterator, Protocol
 
 from .evaluate import Answer, Request
+from .results import Incident
 
 
 @dataclass(slots=True)
@@ -32,6 +33,9 @@ class Session(Protocol):
 
     @property
     def stderr(self) -> str: ...
+
+    @property
+    def incidents(self) -> list[Incident]: ...
 
     def close(self) -> None: ...
 

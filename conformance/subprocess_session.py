@@ -15,21 +15,27 @@ adapter itself failed (a bug in the shim, not a refusal by the implementation): 
 Messages are in the corpus's decoded form; a roundtrip check is a decode followed by an encode of the
 decoded message, two requests. Lines are strict JSON (no NaN/Infinity tokens); stderr is free text.
 
-The program has ``hello_timeout`` (default: ``timeout``) seconds to start and answer hello.
-Up to ``pipeline`` requests are in flight. A request's clock starts when it was sent or when the
-last answer arrived, whichever is later, so a sequential program gets ``timeout`` seconds for each
-request. When the program dies (stdout EOF), stops answering, writes a line that is not a JSON object
-with a known id, or a line longer than ``max_line``, it is restarted (and greeted again) and the
-requests that were in flight are replayed one at a time; then pipelining resumes. Such a failure is
-blamed (CRASH, ADAPTER_ERROR) on a request only when it happens while that request is replayed alone,
-so it lands on the request that causes it; a timeout lands on the oldest request in flight at once.
-After ``MAX_RESTARTS`` restarts in a row without an answer the remaining jobs are adapter errors.
+The program has ``hello_timeout`` (default: ``timeout``) seconds to start and answer hello. It runs in
+a session (process group) of its own, so that nothing it starts outlives the run: the group is killed at
+every restart and at the end. Up to ``pipeline`` requests are in flight. A request's clock starts when it
+was sent or when the last answer arrived, whichever is later, so a sequential program gets ``timeout``
+seconds for each request. When the program dies (seen by its PID, even if a child still holds its
+stdout), stops answering, closes its stdout, writes a line that is not a JSON object with a known id, or a
+line longer than ``max_line``, it is restarted (and greeted again) and the requests that were in flight
+are replayed one at a time; then pipelining resumes. Such a failure is blamed (CRASH, ADAPTER_ERROR) on a
+request only when it happens while that request is replayed alone, so it lands on the request that
+causes it; a timeout lands on the oldest request in flight at once. A failure that names no request is
+an ``Incident`` of the run, and every replayed request carries a note saying how it was answered, so that
+a one-off violation is never forgiven silently. After ``MAX_RESTARTS`` restarts in a row without an
+answer the remaining jobs are adapter errors.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import queue
+import signal
 import subprocess
 import threading
 import time
@@ -39,11 +45,13 @@ from itertools import count
 from typing import Iterable, Iterator
 
 from .evaluate import Answer
+from .results import Incident
 from .session import AdapterStartError, Job
 
 STDERR_KEEP = 64 * 1024
 MAX_RESTARTS = 20
 SNIPPET = 200
+EXIT_DRAIN = 1.0  # seconds to read what a program wrote before it exited, once its group is killed
 
 
 def _snippet(raw: bytes | str) -> str:
@@ -80,25 +88,48 @@ class _StderrTail:
             kept = self._data[len(self._data) - min(self.total - since, len(self._data)):]
             return kept.decode("utf-8", "replace")
 
+    def report(self) -> str:
+        """All that is kept, saying first how many earlier bytes were cut."""
+        with self._lock:
+            cut = self.total - len(self._data)
+        marker = f"[imc-conformance: the first {cut:,} bytes of the adapter's stderr were cut]\n" if cut else ""
+        return marker + self.text()
+
 
 class _Process:
-    """One run of the program: pipes, a thread each for stdin, stdout and stderr, and an event queue.
+    """One run of the program, in a process group of its own: pipes, a thread each for stdin, stdout and
+    stderr, one that waits for its exit, and an event queue.
 
     Events: ``("line", bytes)``, ``("oversize", first bytes)`` (stdout is no longer read after it),
-    ``("eof", b"")``.
+    ``("eof", b"")``, ``("exit", b"")`` (the program itself ended, whoever still holds its stdout).
     """
 
     def __init__(self, argv: list[str], cwd, env, max_line: int, tail: _StderrTail):
         self.popen = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                      cwd=cwd, env=env, shell=False)
+                                      cwd=cwd, env=env, shell=False, start_new_session=True)
         self.events: queue.SimpleQueue = queue.SimpleQueue()
         self._outbox: queue.SimpleQueue = queue.SimpleQueue()
         self._max_line = max_line
         self.stderr_start = tail.total
+        self.exited_at: float | None = None  # when the exit event was handled
         self._stderr_reader = threading.Thread(target=self._read_stderr, args=(tail,), daemon=True)
         for thread in (threading.Thread(target=self._write, daemon=True),
-                       threading.Thread(target=self._read_stdout, daemon=True), self._stderr_reader):
+                       threading.Thread(target=self._read_stdout, daemon=True), self._stderr_reader,
+                       threading.Thread(target=self._wait, daemon=True)):
             thread.start()
+
+    def kill_group(self) -> None:
+        """Kill the program and everything it started (its process group), whether or not it still runs."""
+        try:
+            os.killpg(self.popen.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+    def exited(self) -> None:
+        """The program ended: kill what it left behind, so that its stdout reaches EOF once drained."""
+        if self.exited_at is None:
+            self.exited_at = time.monotonic()
+            self.kill_group()
 
     def send(self, request: dict) -> None:
         self._outbox.put(json.dumps(request, separators=(",", ":")).encode() + b"\n")
@@ -110,15 +141,17 @@ class _Process:
         except queue.Empty:
             return None
 
-    def exit_status(self, wait: float = 0.5) -> str:
+    def exit_status(self, wait: float = 0.5) -> str | None:
+        """How the program ended ("exited with code 3"), or None if it still runs after ``wait`` seconds."""
         try:
             code = self.popen.wait(wait)
         except subprocess.TimeoutExpired:
-            return "closed its stdout"
+            return None
         return f"exited with code {code}" if code >= 0 else f"was killed by signal {-code}"
 
     def stop(self, *, kill: bool = False, grace: float = 2.0) -> None:
-        """Close stdin, then end the program: at once with ``kill``, else terminate, wait, kill."""
+        """Close stdin, then end the program: at once with ``kill``, else terminate, wait, kill; then kill
+        whatever it started."""
         self._outbox.put(None)
         if self.popen.poll() is None:
             if kill:
@@ -133,6 +166,7 @@ class _Process:
             except subprocess.TimeoutExpired:
                 self.popen.kill()
                 self.popen.wait()
+        self.kill_group()
         self._stderr_reader.join(grace)  # the stderr tail is complete once its reader has seen EOF
 
     def _write(self) -> None:
@@ -162,6 +196,10 @@ class _Process:
         finally:
             stdout.close()
 
+    def _wait(self) -> None:
+        self.popen.wait()
+        self.events.put(("exit", b""))
+
     def _read_stderr(self, tail: _StderrTail) -> None:
         stderr = self.popen.stderr
         try:
@@ -180,6 +218,7 @@ class _Call:
     then_encode: bool = False  # the decode half of a roundtrip
     replayed: bool = False  # sent alone after a restart: a failure while it is in flight is its own
     sent: float = 0.0
+    note: str = ""  # why it was replayed, when no request was to blame (passed on to its answer)
 
 
 def _first_call(job: Job) -> _Call:
@@ -227,6 +266,10 @@ class _Restart(Exception):
         super().__init__(why)
         self.why, self.blame, self.answer = why, blame, answer
 
+    @property
+    def incident_kind(self) -> str:
+        return "crash" if self.answer.kind == "crash" else "protocol"
+
 
 class SubprocessSession:
     """A session over a program speaking the JSON-lines protocol (see the module docstring)."""
@@ -240,10 +283,11 @@ class SubprocessSession:
         self._ids = count(1)
         self._proc: _Process | None = None
         self._info: dict | None = None
+        self.incidents: list[Incident] = []
 
     @property
     def stderr(self) -> str:
-        return self._tail.text()
+        return self._tail.report()
 
     def hello(self) -> dict:
         """Start the program if needed; its hello answer (implementation, suites, byte_orders)."""
@@ -273,12 +317,19 @@ class SubprocessSession:
     def _greet(self, proc: _Process) -> dict:
         ident = next(self._ids)
         proc.send({"id": ident, "op": "hello"})
-        event = proc.next_event(self.hello_timeout)
-        if event is None:
-            raise AdapterStartError(f"adapter did not answer hello within {self.hello_timeout:g} s")
-        kind, raw = event
+        deadline = time.monotonic() + self.hello_timeout
+        while True:
+            event = proc.next_event(deadline - time.monotonic())
+            if event is None and proc.exited_at is None:
+                raise AdapterStartError(f"adapter did not answer hello within {self.hello_timeout:g} s")
+            if event is not None and event[0] == "exit":
+                proc.exited()
+                deadline = min(deadline, proc.exited_at + EXIT_DRAIN)
+                continue
+            break
+        kind, raw = event or ("eof", b"")
         if kind == "eof":
-            status = proc.exit_status()
+            status = proc.exit_status() or "closed its stdout"
             proc.stop(kill=True)
             tail = _snippet(self._tail.text(proc.stderr_start)[-SNIPPET:].strip())
             raise AdapterStartError(f"adapter {status} before answering hello" + (f"; stderr: {tail}" if tail else ""))
@@ -290,21 +341,13 @@ class SubprocessSession:
             reply = None
         if not isinstance(reply, dict):
             raise AdapterStartError(f"adapter answered hello with something that is not a JSON object: {_snippet(raw)}")
-        return self._hello_info(ident, reply, raw)
-
-    @staticmethod
-    def _hello_info(ident: int, reply: dict, raw: bytes) -> dict:
         if reply.get("id") != ident:
-            raise AdapterStartError(f"adapter answered hello with id {reply.get('id')!r}, expected {ident}")
+            raise AdapterStartError(f"adapter answered hello with id {str(reply.get('id'))[:40]!r}, expected {ident}")
+        if reply.get("ok") is False:
+            raise AdapterStartError(f"adapter refused hello: {_snippet(str(reply.get('error', '')))}")
         if reply.get("ok") is not True:
-            raise AdapterStartError(f"adapter refused hello: {_snippet(str(reply.get('error', raw)))}")
-        info = {key: reply.get(key) for key in ("implementation", "suites", "byte_orders")}
-        lists_ok = all(isinstance(info[k], list) and all(isinstance(x, str) for x in info[k])
-                       for k in ("suites", "byte_orders"))
-        if not isinstance(info["implementation"], str) or not lists_ok or not set(info["byte_orders"]) <= {"le", "be"}:
-            raise AdapterStartError("adapter's hello answer needs 'implementation' (a string), 'suites' and "
-                                    f"'byte_orders' (lists of strings; orders 'le'/'be'): {_snippet(raw)}")
-        return info
+            raise AdapterStartError(f"adapter answered hello without \"ok\": true: {_snippet(raw)}")
+        return {key: value for key, value in reply.items() if key not in ("id", "ok")}
 
     # ------------------------------------------------------------ running jobs
 
@@ -343,15 +386,26 @@ class SubprocessSession:
 
     def _receive(self, state: _RunState) -> Iterator[tuple[Job, Answer]]:
         """Handle the next event of the program; raises _Restart when the program must be restarted."""
+        proc = self._proc
         oldest = next(iter(state.inflight.values()))
         deadline = max(oldest.sent, state.last_answer) + self.timeout
-        event = self._proc.next_event(deadline - time.monotonic())
+        if proc.exited_at is not None:  # only what it wrote before it ended is still to come
+            deadline = min(deadline, proc.exited_at + EXIT_DRAIN)
+        event = proc.next_event(deadline - time.monotonic())
+        if event is None and proc.exited_at is not None:
+            raise self._unattributed(state, "crash", f"adapter {proc.exit_status()}")
         if event is None:
             raise _Restart(f"no answer within {self.timeout:g} s", oldest,
                            Answer("timeout", reason=f"no answer within {self.timeout:g} s"))
         kind, raw = event
+        if kind == "exit":
+            proc.exited()
+            return
         if kind == "eof":
-            raise self._unattributed(state, "crash", f"adapter {self._proc.exit_status()}")
+            status = proc.exit_status()
+            if status is None:
+                raise self._unattributed(state, "adapter-error", "adapter closed its stdout but kept running")
+            raise self._unattributed(state, "crash", f"adapter {status}")
         if kind == "oversize":
             raise self._unattributed(state, "adapter-error",
                                      f"adapter wrote a line over {self.max_line} bytes: {_snippet(raw)}")
@@ -366,7 +420,9 @@ class SubprocessSession:
             what = "not a JSON object" if not isinstance(reply, dict) else "an answer to no request in flight"
             raise self._unattributed(state, "adapter-error", f"adapter wrote {what}: {_snippet(raw)}")
         state.answered()
-        yield from state.finish(call, _answer(call.body["op"], reply))
+        answer = _answer(call.body["op"], reply)
+        answer.note = call.note
+        yield from state.finish(call, answer)
 
     @staticmethod
     def _unattributed(state: _RunState, kind: str, reason: str) -> _Restart:
@@ -376,10 +432,19 @@ class SubprocessSession:
         return _Restart(reason, blame, Answer(kind, reason=reason))
 
     def _recover(self, state: _RunState, restart: _Restart) -> Iterator[tuple[Job, Answer]]:
-        """Fail the blamed call, queue the other calls in flight for replay, restart the program."""
+        """Fail the blamed call, queue the other calls in flight for replay, restart the program.
+
+        When no call is to blame, the failure is an incident of the run and each replayed call is noted."""
         if restart.blame is not None:
             state.inflight = {i: c for i, c in state.inflight.items() if c is not restart.blame}
             yield from state.finish(restart.blame, restart.answer)
+        else:
+            calls = list(state.inflight.values())
+            ids = list(dict.fromkeys(c.job.case["id"] for c in calls))
+            self.incidents.append(Incident(restart.incident_kind, restart.why, ids))
+            for call in calls:
+                call.note = (f"answered alone after the adapter was restarted: {restart.why} "
+                             f"(while {len(calls)} request{'s were' if len(calls) != 1 else ' was'} in flight)")
         for call in state.inflight.values():
             call.replayed = True
         state.replay.extendleft(reversed(list(state.inflight.values())))
@@ -455,7 +520,7 @@ class _RunState:
         """Continue a roundtrip with the implementation's decoding: encode it, or fail as the decode did."""
         if decoded.kind == "ok":
             body = {"op": "encode", "suite": job.suite, "message": decoded.message, "byte_order": job.request.byte_order}
-            self.ready.appendleft(_Call(job, body))
+            self.ready.appendleft(_Call(job, body, note=decoded.note))
         else:
             self.finished.append((job, decoded))
 

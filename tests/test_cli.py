@@ -100,7 +100,7 @@ def test_strict_turns_non_strict_into_failure(tmp_path, capsys):
         "from imc_conformance.definitions import load_definitions\n"
         "D = load_definitions()\n"
         "class A:\n"
-        "    def hello(self): return {'implementation': 'blames-crc', 'byte_orders': ['le', 'be']}\n"
+        "    def hello(self): return {'implementation': 'blames-crc', 'suites': ['imc'], 'byte_orders': ['le', 'be']}\n"
         "    def encode(self, s, m, o): return codec.encode(D, m, o)\n"
         "    def decode(self, s, f):\n"
         "        try: return codec.decode(D, f)\n"
@@ -126,9 +126,9 @@ def test_editions_change_expectations(edition, expected, capsys):
 
 
 @pytest.mark.parametrize("mangle,message", [
-    (lambda doc: doc["cases"][3].update(expect="maybe"), "$.cases[3].expect: expected one of"),
-    (lambda doc: doc["cases"][0]["frames"].update(le="54f"), "$.cases[0].frames.le: expected hex bytes"),
-    (lambda doc: doc["cases"][-1].pop("rule"), "].rule: an invalid case names the rule it breaks"),
+    (lambda doc: doc["cases"][3].update(expect="maybe"), "$.cases[3].expect: 'maybe' is not valid"),
+    (lambda doc: doc["cases"][0]["frames"].update(le="54f"), "$.cases[0].frames.le: '54f' does not match"),
+    (lambda doc: doc["cases"][-1].pop("rule"), "$.cases[92]: 'rule' is a required property"),
     (lambda doc: doc.update(cases={}), "$.cases: expected an array of cases"),
 ])
 def test_a_malformed_vector_file_names_the_file_and_json_path(tmp_path, capsys, mangle, message):

@@ -43,7 +43,7 @@ class BrokenEncoder:
         self.defs = defs
 
     def hello(self) -> dict:
-        return {"implementation": "broken-encoder 0.1 (LblRange.range + 1)", "byte_orders": ["le", "be"]}
+        return {"implementation": "broken-encoder 0.1 (LblRange.range + 1)", "suites": ["imc"], "byte_orders": ["le", "be"]}
 
     def encode(self, suite, message, byte_order):
         message = copy.deepcopy(message)
@@ -134,7 +134,7 @@ def test_schema_rejects_broken_documents(broken_result):
     validator = Draft202012Validator(SCHEMA)
     good = json.loads(render_json(broken_result))
     good["messages"] = good["messages"][:1]
-    for mutate in (lambda d: d.update(extra=1), lambda d: d.update(format="imc-conformance-result/2"),
+    for mutate in (lambda d: d.update(extra=1), lambda d: d.update(format="imc-conformance-result/1"),
                    lambda d: d["messages"][0]["cases"][0].update(verdict="MAYBE"),
                    lambda d: d["messages"][0]["cases"][0].update(surprise=True),
                    lambda d: d["messages"][0]["cases"][0]["checks"][0].update(expected="xyz"),

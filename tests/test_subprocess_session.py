@@ -1,7 +1,7 @@
 """The subprocess session: pipelining, failures pinned on the right case, start-up errors, and the shims.
 
-Deliberately broken programs (``tests/broken_programs``) each misbehave on one case's frame; the
-case must get the failure's verdict and every other case the verdict of the correct program.
+The hostile adapter (``tests/hostile_adapter.py``) misbehaves in one way per mode on one case's frame;
+the case must get the failure's verdict and every other case the verdict of the correct program.
 The imcpy and pyimclsts shims must give the same verdicts as the library adapters over the corpus.
 """
 
@@ -19,6 +19,7 @@ import pytest
 from imc_conformance.corpus_data import load_cases
 from imc_conformance.definitions import load_definitions
 from imc_conformance.evaluate import Judge, Verdict, expectation, plan, worst
+from imc_conformance.hello import check_hello
 from imc_conformance.library import LibrarySession
 from imc_conformance.session import AdapterStartError, Job
 from imc_conformance.subprocess_session import MAX_RESTARTS, SubprocessSession
@@ -26,7 +27,7 @@ from imc_conformance.subprocess_session import MAX_RESTARTS, SubprocessSession
 EDITION = "imc-5.4.30"
 EDITIONS = ("imc-5.4.11", "imc-5.4.30")
 ROOT = Path(__file__).resolve().parent.parent
-PROGRAMS = Path(__file__).resolve().parent / "broken_programs"
+HOSTILE = Path(__file__).resolve().parent / "hostile_adapter.py"
 CASES = load_cases()
 SELECTION = [c for c in CASES if c["id"].split("/")[1] in ("LblRange", "AcousticStatus")]
 TRIGGER = "imc/LblRange/realistic/crosscheck"
@@ -37,7 +38,7 @@ JUDGE = Judge(load_definitions())
 @contextmanager
 def session(argv: list[str], **options):
     """A session that closes; programs get 30 s to start, however short the per-request timeout."""
-    name = Path(argv[1]).stem if len(argv) > 1 else argv[0]
+    name = argv[2] if len(argv) > 2 else argv[0]
     s = SubprocessSession(argv, name=name, **{"hello_timeout": 30, **options})
     try:
         yield s
@@ -45,8 +46,8 @@ def session(argv: list[str], **options):
         s.close()
 
 
-def program(name: str) -> list[str]:
-    return [sys.executable, str(PROGRAMS / f"{name}.py"), TRIGGER_FRAME]
+def program(mode: str) -> list[str]:
+    return [sys.executable, str(HOSTILE), mode, TRIGGER_FRAME]
 
 
 def collect(s, cases, editions=(EDITION,)) -> tuple[set[str], dict]:
@@ -106,7 +107,7 @@ def test_the_reference_program_passes_the_selection(reference):
     ("hang", Verdict.TIMEOUT),
     ("crash", Verdict.CRASH),
     ("garbage", Verdict.ADAPTER_ERROR),
-    ("unknown_id", Verdict.ADAPTER_ERROR),
+    ("unknown-id", Verdict.ADAPTER_ERROR),
     ("liar", Verdict.FAIL),
     ("malformed", Verdict.ADAPTER_ERROR),
     ("internal", Verdict.ADAPTER_ERROR),
@@ -128,19 +129,19 @@ def test_stderr_is_kept_across_restarts():
     with session(program("crash"), timeout=1) as s:
         _, answers = collect(s, SELECTION)
         assert answers[TRIGGER, "decode-le"].reason == "adapter exited with code 3"
-        assert "crash.py: dying on the trigger frame" in s.stderr
+        assert "hostile: dying on the trigger frame" in s.stderr
         assert "[imc-conformance: restarting the adapter: adapter exited with code 3]" in s.stderr
 
 
 def test_answers_in_any_order_are_matched_by_id(reference):
-    with session([sys.executable, str(PROGRAMS / "reversed_order.py")]) as s:
+    with session(program("reversed")) as s:
         assert verdicts(SELECTION, *collect(s, SELECTION)) == reference
 
 
 def test_a_program_that_keeps_crashing_cannot_hang_the_run():
     cases = SELECTION[:40]
     start = time.perf_counter()
-    with session([sys.executable, str(PROGRAMS / "always_crashes.py")], timeout=2) as s:
+    with session(program("always-crashes"), timeout=2) as s:
         emits, answers = collect(s, cases)
     kinds = [a.kind for a in answers.values()]
     # each restart blames one call; a roundtrip shares the answer to decoding its frame (CRASH too)
@@ -222,12 +223,12 @@ ANSWER_HELLO = "import json, time; json.loads(input()); print(json.dumps({reply!
      "adapter answered hello with something that is not a JSON object: Hello, world!"),
     (python(ANSWER_HELLO.format(reply={"id": 1, "ok": False, "error": "no"})), "adapter refused hello: no"),
     (python(ANSWER_HELLO.format(reply={"id": 1, "ok": True})),
-     "adapter's hello answer needs 'implementation' (a string)"),
+     "the adapter's hello needs 'implementation': a non-empty string naming it"),
 ])
 def test_start_up_errors_are_clear(argv, message):
     s = SubprocessSession(argv, name="broken", timeout=30)
     with pytest.raises(AdapterStartError) as error:
-        s.hello()
+        check_hello(s.hello(), "imc")
     assert str(error.value).startswith(message)
     s.close()
 

@@ -12,8 +12,8 @@ from pathlib import Path
 from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
 from ..evaluate import ByteDiff, Verdict
-from ..results import CaseResult, RunResult
-from .common import attention, clean, overall, verdict_columns
+from ..results import FORMAT, CaseResult, RunResult
+from .common import attention, clean, incident_lines, overall, verdict_columns
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 MAX_DETAILED = 200  # failing cases shown in full
@@ -45,6 +45,7 @@ def render_html(result: RunResult) -> str:
     stderr = clean(result.stderr)
     return environment().get_template("report.html.j2").render(
         result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown,
+        incidents=incident_lines(result), format=FORMAT,
         failing_total=len(failing), first_failure=first, stderr=stderr[:MAX_STDERR],
         stderr_cut=max(0, len(stderr) - MAX_STDERR))
 

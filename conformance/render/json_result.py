@@ -1,4 +1,4 @@
-"""The result as its versioned JSON document (``imc-conformance-result/1``, see ``vectors/schema/result.schema.json``)."""
+"""The result as its versioned JSON document (``imc-conformance-result/<version>``, see ``vectors/schema/result.schema.json``)."""
 
 from __future__ import annotations
 

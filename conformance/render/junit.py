@@ -12,7 +12,7 @@ from collections import Counter
 
 from ..evaluate import Verdict
 from ..results import CaseResult, RunResult
-from .common import clean
+from .common import clean, incident_lines
 
 ERRORS = {Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR}
 MESSAGE_LIMIT = 500  # characters of detail in a failure's message attribute
@@ -27,12 +27,12 @@ def outcome(case: CaseResult, strict: bool) -> str | None:
         return "error"
     if v is Verdict.UNSUPPORTED:
         return "skipped"
-    return None if v is Verdict.PASS else "note"
+    return None if v is Verdict.PASS and not case.notes else "note"
 
 
 def body(case: CaseResult) -> str:
     """The full account of a case: detail, clause, rule, errata, waiver, and every check."""
-    lines = [f"{case.verdict.value}: {case.detail}", f"clause: {case.clause}"]
+    lines = [f"{case.verdict.value}: {case.detail}", f"clause: {case.clause}", *(f"note: {n}" for n in case.notes)]
     if case.rule:
         lines.append(f"rule: {case.rule}")
     if case.errata:
@@ -61,8 +61,10 @@ def testcase(case: CaseResult, suite: str, message: str, strict: bool) -> tuple[
 
 
 def render_junit(result: RunResult) -> str:
-    props = {"suite": result.suite, "edition": result.edition, "implementation": result.implementation,
-             "adapter": result.adapter, "strict": str(result.strict).lower()}
+    props = [("suite", result.suite), ("edition", result.edition), ("implementation", result.implementation),
+             ("adapter", result.adapter), ("strict", str(result.strict).lower()),
+             ("complete", str(result.complete).lower()),
+             *(("incident", line) for line in incident_lines(result)), *(("note", note) for note in result.notes)]
     suites = []
     for message in result.messages:
         cases = [testcase(c, result.suite, message.name, result.strict) for c in message.cases]
@@ -71,7 +73,7 @@ def render_junit(result: RunResult) -> str:
         suite = ET.Element("testsuite", name=f"{result.suite}/{message.name}", **{k: str(n) for k, n in counts.items()},
                            time="0", timestamp=result.started)
         properties = ET.SubElement(suite, "properties")
-        for name, value in props.items():
+        for name, value in props:
             ET.SubElement(properties, "property", name=name, value=clean(value))
         suite.extend(el for el, _ in cases)
         suites.append((suite, counts))

@@ -6,14 +6,14 @@ import re
 
 from ..evaluate import Verdict
 from ..results import RunResult
-from .common import attention, clean, overall, verdict_columns
+from .common import attention, clean, incident_lines, overall, verdict_columns
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",
     Verdict.UNSUPPORTED: "⏭️", Verdict.CRASH: "💥", Verdict.TIMEOUT: "⏱️", Verdict.ADAPTER_ERROR: "🛠️",
     Verdict.WAIVED: "🙈", Verdict.WAIVER_STALE: "🧹",
 }
-OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️"}
+OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸️"}
 MAX_CASES = 50
 MAX_DETAIL = 300
 
@@ -48,6 +48,10 @@ def render_markdown(result: RunResult) -> str:
         counts = m.counts
         lines.append(f"| {cell(m.name)} ({m.id}) | {OVERALL.get(m.verdict, '')} {m.verdict} | "
                      + " | ".join(str(counts[v] or "") for v in columns) + " |")
+    if not result.complete:
+        lines += ["", "**Incomplete run**: it was interrupted; only the cases done so far are counted."]
+    if result.incidents:
+        lines += [""] + [f"- ⚠️ {cell(line, 1000)}" for line in incident_lines(result)]
     if result.notes:
         lines += [""] + [f"- {cell(note)}" for note in result.notes]
     failing = attention(result)

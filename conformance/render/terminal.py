@@ -1,0 +1,57 @@
+"""The terminal rendering of a run: a table per message, the failing cases, incidents, notes, the summary (rich).
+
+Every piece of text from the result passes ``printable`` (control characters shown as escapes) and rich's
+``escape`` (no markup), so an implementation can neither drive the terminal nor forge lines in a CI log.
+"""
+
+from __future__ import annotations
+
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from ..evaluate import Verdict
+from ..results import RunResult, failing
+from .common import incident_lines, printable
+
+COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
+SHOWN_FAILURES = 20
+
+
+def safe(text: str | None) -> str:
+    """Result text made inert for a rich console."""
+    return escape(printable(text))
+
+
+def print_result(result: RunResult, console: Console) -> None:
+    title = f"{result.implementation} — IMC corpus, edition {result.edition}"
+    table = Table(title=safe(title + ("" if result.complete else " (INCOMPLETE: interrupted)")))
+    table.add_column("message")
+    table.add_column("id", justify="right")
+    table.add_column("verdict")
+    for v in COLUMNS:
+        table.add_column(v.value, justify="right")
+    table.add_column("other", justify="right")
+    table.add_column("known errata")
+    for m in result.messages:
+        counts = m.counts
+        other = sum(n for v, n in counts.items() if v not in COLUMNS)
+        errata = sorted({e for c in m.cases for e in c.errata})
+        colour = "green" if m.verdict == "PASS" else "red"
+        table.add_row(safe(m.name), str(m.id), f"[{colour}]{m.verdict}[/]", *(str(counts[v]) for v in COLUMNS),
+                      str(other), safe(", ".join(errata)))
+    console.print(table)
+    shown = [c for c in result.cases if failing(c.verdict, result.strict)]
+    for c in shown[:SHOWN_FAILURES]:
+        errata = f" [dim](erratum {safe(', '.join(c.errata))})[/]" if c.errata else ""
+        console.print(f"[red]{c.verdict.value}[/] {safe(c.id)}{errata}: {safe(c.detail[:300])}")
+    if len(shown) > SHOWN_FAILURES:
+        console.print(f"… and {len(shown) - SHOWN_FAILURES} more failing cases (see --json/--html reports)")
+    for line in incident_lines(result):
+        console.print(f"[red]incident:[/] {safe(line[:600])}")
+    for note in result.notes:
+        console.print(f"[yellow]note:[/] {safe(note)}")
+    summary = ", ".join(f"{n} {v}" for v, n in result.summary.items())
+    explained = sum(1 for c in shown if c.errata)
+    console.print(f"{len(result.cases)} cases in {result.duration:.2f} s: {summary}"
+                  + (f" ({explained} failures are documented errata)" if explained else ""))
