@@ -39,8 +39,8 @@ from operator import attrgetter
 import imcpy
 
 from imc_conformance.adapter_api import Rejected, Unsupported
-from imc_conformance.definitions import Definitions, FieldDef, MessageDef, load_definitions
-from imc_conformance.values import float_from_bits, float_to_bits, raw_bytes, text_bytes
+from imc_conformance.suites.imc.definitions import Definitions, FieldDef, MessageDef, load_definitions
+from imc_conformance.suites.imc.values import float_from_bits, float_to_bits, raw_bytes, text_bytes
 
 SUITE = "imc"
 
@@ -118,7 +118,7 @@ class ImcpyAdapter:
 
     def hello(self) -> dict:
         return {"implementation": f"imcpy {version('imcpy')} (DUNE C++ codec, IMC {imcpy.constants.VERSION})",
-                "suites": [SUITE], "byte_orders": ["le"]}
+                "suites": [SUITE], "byte_orders": ["le"], "errata": "imcpy"}
 
     def encode(self, suite: str, message: dict, byte_order: str) -> bytes:
         _check_suite(suite)

@@ -1,7 +1,7 @@
 """imcpy (DUNE's C++ IMC codec) behind the subprocess adapter protocol; standard library and imcpy only.
 
 Usage: ``python adapters/imcpy_shim.py [--definitions PATH]``. Reads one JSON request per line on
-stdin and writes one JSON answer per line on stdout (protocol: ``imc_conformance.subprocess_session``):
+stdin and writes one JSON answer per line on stdout (protocol: ``imc_conformance.sessions.subprocess``):
 ``{"id", "ok": true, ...}``, a refusal ``{"id", "ok": false, "error", "rule"?}``, an absent capability
 ``{"id", "ok": false, "unsupported": true, "error"}``, and ``{"id", "ok": false, "internal": true,
 "error"}`` when the shim itself fails (an adapter error, never the implementation's refusal).
@@ -117,7 +117,7 @@ class ImcpyShim:
 
     def hello(self) -> dict:
         return {"implementation": f"imcpy {version('imcpy')} (DUNE C++ codec, IMC {imcpy.constants.VERSION})",
-                "suites": [SUITE], "byte_orders": ["le"]}
+                "suites": [SUITE], "byte_orders": ["le"], "errata": "imcpy"}
 
     def encode(self, suite: str, message, byte_order: str) -> bytes:
         check_suite(suite)

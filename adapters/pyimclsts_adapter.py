@@ -60,9 +60,9 @@ import types
 from pathlib import Path
 
 from imc_conformance.adapter_api import Rejected, Unsupported
-from imc_conformance.definitions import Definitions, MessageDef, load_definitions
-from imc_conformance.imc_xml import cache_dir, fetch_imc_xml
-from imc_conformance.values import float_from_bits, float_to_bits, text_value
+from imc_conformance.suites.imc.definitions import Definitions, MessageDef, load_definitions
+from imc_conformance.suites.imc.imc_xml import cache_dir, fetch_imc_xml
+from imc_conformance.suites.imc.values import float_from_bits, float_to_bits, text_value
 
 PACKAGE = "pyimc_generated"  # fixed by pyimclsts.extract (_target_folder) and pyimclsts.network (_module_name)
 VERSION = importlib.metadata.version("pyimclsts")
@@ -238,7 +238,8 @@ class PyimclstsAdapter:
         self._converters: dict[str, _Message] = {}
 
     def hello(self) -> dict:
-        return {"implementation": f"pyimclsts {VERSION}", "suites": ["imc"], "byte_orders": ["be", "le"]}
+        return {"implementation": f"pyimclsts {VERSION}", "suites": ["imc"], "byte_orders": ["be", "le"],
+                "errata": "pyimclsts"}
 
     # -------------------------------------------------------- encoding
 

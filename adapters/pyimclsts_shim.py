@@ -2,7 +2,7 @@
 
 Usage: ``python adapters/pyimclsts_shim.py [--imc-xml PATH] [--cache DIR] [--definitions PATH]``.
 Reads one JSON request per line on stdin and writes one JSON answer per line on stdout (protocol:
-``imc_conformance.subprocess_session``): ``{"id", "ok": true, ...}``, a refusal ``{"id", "ok": false,
+``imc_conformance.sessions.subprocess``): ``{"id", "ok": true, ...}``, a refusal ``{"id", "ok": false,
 "error", "rule"?}``, an absent capability ``{"id", "ok": false, "unsupported": true, "error"}``, and
 ``{"id", "ok": false, "internal": true, "error"}`` when the shim itself fails (an adapter error).
 
@@ -178,7 +178,8 @@ class PyimclstsShim:
         self.converters = {abbrev: self.message(abbrev) for abbrev in self.classes}
 
     def hello(self) -> dict:
-        return {"implementation": f"pyimclsts {VERSION}", "suites": ["imc"], "byte_orders": ["be", "le"]}
+        return {"implementation": f"pyimclsts {VERSION}", "suites": ["imc"], "byte_orders": ["be", "le"],
+                "errata": "pyimclsts"}
 
     def encode(self, suite, message, byte_order) -> bytes:
         check_suite(suite)

@@ -1,9 +1,10 @@
 """What a library adapter raises: the contract between the runner and an implementation under test.
 
-A library adapter is any object with ``hello() -> dict``, ``encode(suite, message, byte_order) -> bytes``
-and ``decode(suite, frame) -> dict`` (messages in the corpus's decoded form). It refuses an input by
-raising ``Rejected``; it declares a capability absent by raising ``Unsupported``. Any other exception
-is an adapter error, never a pass.
+A library adapter is any object with ``hello() -> dict``, ``encode(suite, message, encoding) -> bytes``
+and ``decode(suite, frame, **params) -> dict`` (messages in the suite's decoded form; ``params`` are the
+suite's, e.g. a ROS ``type``), and, where a suite checks definitions, ``describe(suite, **params) -> dict``.
+It refuses an input by raising ``Rejected``; it declares a capability absent by raising ``Unsupported``.
+Any other exception is an adapter error, never a pass.
 """
 
 from __future__ import annotations

@@ -16,10 +16,9 @@ import argparse
 import statistics
 import time
 
-from .corpus_data import load_cases, vector_files
-from .definitions import load_definitions
-from .evaluate import expectation, plan
-from .runner import run_cases
+from .core.cases import expectation
+from .core.runner import run_cases
+from .files import open_corpus, read_cases
 
 EDITION = "imc-5.4.30"
 # (what, row, unit, bound): seconds must stay under the bound, cases/s must reach it.
@@ -44,17 +43,17 @@ def target_lines(medians: dict[str, float], cases: int) -> list[str]:
     return lines
 
 
-def imcpy_alone(cases: list[dict], emits: set[str]) -> float:
+def imcpy_alone(suite, cases, emits: set[str]) -> float:
     """Seconds for the bare imcpy calls the corpus needs (decode via Packet.deserialize, encode via serialize)."""
     import imcpy
 
     frames, encodable = [], []
     for case in cases:
-        for request in plan(case, EDITION, emits):
+        for request in suite.kinds[case.kind].plan(case.data, EDITION, emits):
             if request.op in ("decode", "roundtrip"):
-                frames.append(bytes.fromhex(case["frames"][request.byte_order]))
-            if request.op in ("encode", "roundtrip") and case["expect"] == "valid":
-                encodable.append(case["frames"]["le"])
+                frames.append(bytes.fromhex(request.frame))
+            if request.op in ("encode", "roundtrip") and case.data["expect"] == "valid":
+                encodable.append(case.data["frames"]["le"])
     messages = [imcpy.Packet.deserialize(bytes.fromhex(f)) for f in encodable]
     start = time.perf_counter()
     for frame in frames:
@@ -81,32 +80,35 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     from .adapters.imcpy_adapter import adapter
-    from .cli import shim_argv
-    from .library import LibrarySession
+    from .sessions.library import LibrarySession
+    from .sessions.subprocess import SubprocessSession
 
-    load = timed(lambda: (vector_files.cache_clear(), load_cases()))
-    defs, cases = load_definitions(), load_cases()
-    cases = [c for c in cases if expectation(c, EDITION) is not None]
+    suite, cases = open_corpus("imc")
+    load = timed(lambda: (read_cases.cache_clear(), open_corpus("imc")))
+    cases = [c for c in cases if expectation(c.data, EDITION) is not None]
     library = LibrarySession(adapter(), "imcpy")
+    shim = suite.adapters["imcpy-shim"].argv()
+
+    def run(session, some, name):
+        return run_cases(session, suite, some, edition=EDITION, adapter=name)
+
     rows: dict[str, list[float]] = {"library": [], "imcpy alone": [], "subprocess": [], "process per case": []}
     for _ in range(args.repeat):
-        rows["library"].append(timed(lambda: run_cases(library, cases, defs=defs, edition=EDITION, adapter="imcpy")))
-        rows["imcpy alone"].append(imcpy_alone(cases, {"le"}))
+        rows["library"].append(timed(lambda: run(library, cases, "imcpy")))
+        rows["imcpy alone"].append(imcpy_alone(suite, cases, {"le"}))
         if not args.skip_subprocess:
-            from .subprocess_session import SubprocessSession
-
-            session = SubprocessSession(shim_argv("imcpy-shim"), name="imcpy-shim")
+            session = SubprocessSession(shim, name="imcpy-shim", encoding_param=suite.encoding_param)
             try:
-                rows["subprocess"].append(timed(lambda: run_cases(session, cases, defs=defs, edition=EDITION, adapter="imcpy-shim")))
+                rows["subprocess"].append(timed(lambda: run(session, cases, "imcpy-shim")))
             finally:
                 session.close()
             sample = cases[:: max(1, len(cases) // args.per_case_sample)][: args.per_case_sample]
 
             def one_process_each():
                 for case in sample:
-                    s = SubprocessSession(shim_argv("imcpy-shim"), name="imcpy-shim")
+                    s = SubprocessSession(shim, name="imcpy-shim", encoding_param=suite.encoding_param)
                     try:
-                        run_cases(s, [case], defs=defs, edition=EDITION, adapter="imcpy-shim")
+                        run(s, [case], "imcpy-shim")
                     finally:
                         s.close()
             rows["process per case"].append(timed(one_process_each) * len(cases) / len(sample))

@@ -1,4 +1,4 @@
-"""``imc-conformance``: run the corpus against an implementation, list it, re-render reports, rebuild it."""
+"""``imc-conformance``: run a suite's corpus against an implementation, list it, re-render reports, rebuild it."""
 
 from __future__ import annotations
 
@@ -14,33 +14,30 @@ import shlex
 import sys
 from pathlib import Path
 
-from .corpus_data import CorpusError, load_cases, select_cases
-from .definitions import load_definitions
-from .evaluate import expectation
+from .core.cases import expectation, select_cases
+from .core.session import AdapterStartError
+from .core.verdicts import failing
+from .core.waivers import WaiverError
+from .files import CorpusError
 from .render.common import printable
-from .results import RunResult, failing
-from .session import AdapterStartError
+from .suites import names as suite_names
 
-LIBRARY_ADAPTERS = {
-    "imcpy": "imc_conformance.adapters.imcpy_adapter:adapter",
-    "pyimclsts": "imc_conformance.adapters.pyimclsts_adapter:adapter",
-}
-SHIMS = {"imcpy-shim": "imcpy_shim.py", "pyimclsts-shim": "pyimclsts_shim.py"}
-EDITIONS = ("imc-5.4.30", "imc-5.4.11")
 REPORTS = ("json", "junit", "markdown", "html")
+DEFAULT_MEMORY_MB = 2048
 
 
 class UsageError(Exception):
     pass
 
 
-def load_library_adapter(spec: str):
-    """An adapter object from a built-in name, ``module:attribute`` or ``path/to/file.py:attribute``."""
-    spec = LIBRARY_ADAPTERS.get(spec, spec)
-    target, _, attr = spec.rpartition(":")
+def load_library_adapter(spec: str, suite, arguments: dict[str, str] | None = None):
+    """An adapter object from a built-in name, ``module:attribute`` or ``path/to/file.py:attribute`` (an
+    adapter object, a class or a factory; ``arguments`` are passed to the class or factory)."""
+    builtin = suite.adapters.get(spec)
+    target, _, attr = (builtin.library if builtin else spec).rpartition(":")
     if not target or not attr:
-        raise UsageError(f"adapter {spec!r}: expected {', '.join([*LIBRARY_ADAPTERS, *SHIMS])}, module:attribute "
-                         "or file.py:attribute (or --adapter-cmd for a subprocess)")
+        raise UsageError(f"adapter {spec!r}: expected {', '.join(suite.adapters)}, module:attribute or "
+                         "file.py:attribute (or --adapter-cmd for a subprocess)")
     try:
         if target.endswith(".py"):
             if not Path(target).is_file():
@@ -56,20 +53,24 @@ def load_library_adapter(spec: str):
     except Exception as exc:
         raise UsageError(f"cannot load adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
     if hasattr(target_, "decode") and not inspect.isclass(target_):
+        if arguments:
+            raise UsageError(f"adapter {spec!r} is an object: it takes no --adapter-arg")
         return target_
     if not callable(target_):
         raise UsageError(f"adapter {spec!r} is a {type(target_).__name__}: expected an adapter object, "
                          "a class or a factory")
-    try:  # a class or a zero-argument factory
-        return target_()
+    try:  # a class or a factory
+        return target_(**(arguments or {}))
     except Exception as exc:
         raise UsageError(f"cannot create the adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
 
 
-def adapter_choice(args) -> tuple[str, list[str] | None]:
+def adapter_choice(args, suite) -> tuple[str, list[str] | None]:
     """The adapter's name and, for a subprocess adapter, its argv; usage errors for an ambiguous choice."""
     if args.adapter_cmd is None:
-        return args.adapter or "imcpy", shim_argv(args.adapter) if args.adapter in SHIMS else None
+        name = args.adapter or next(iter(suite.adapters))
+        builtin = suite.adapters.get(name)
+        return name, builtin.argv() if builtin is not None and builtin.argv is not None else None
     if args.adapter is not None:
         raise UsageError("give either --adapter or --adapter-cmd, not both")
     try:
@@ -81,40 +82,50 @@ def adapter_choice(args) -> tuple[str, list[str] | None]:
     return args.adapter_cmd, argv
 
 
-def open_session(name: str, argv: list[str] | None, timeout: float):
+def adapter_arguments(args) -> dict[str, str]:
+    out = {}
+    for item in args.adapter_arg:
+        name, sep, value = item.partition("=")
+        if not sep or not name.isidentifier():
+            raise UsageError(f"--adapter-arg {item!r}: expected NAME=VALUE")
+        out[name] = value
+    return out
+
+
+def open_session(name: str, argv: list[str] | None, args, suite):
     """The session for the chosen adapter: a subprocess when there is an argv, else a library adapter."""
-    from .library import LibrarySession
+    from .sessions.library import LibrarySession
 
     if argv is not None:
-        from .subprocess_session import SubprocessSession
+        from .sessions.subprocess import SubprocessSession
 
-        return SubprocessSession(argv, name=name, timeout=timeout,
-                                 hello_timeout=max(30.0, timeout))  # start-up (a JVM, class generation) takes longer
-    return LibrarySession(load_library_adapter(name), name)
-
-
-def shim_argv(name: str) -> list[str]:
-    shim = Path(__file__).resolve().parent.parent / "adapters" / SHIMS[name]
-    if not shim.exists():  # installed package: adapters/ is imc_conformance/adapters
-        shim = Path(importlib.import_module("imc_conformance.adapters").__file__).parent / SHIMS[name]
-    argv = [sys.executable, str(shim)]
-    if name == "pyimclsts-shim":
-        from .cache import cache_dir
-        from .imc_xml import fetch_imc_xml
-        argv += ["--imc-xml", str(fetch_imc_xml()), "--cache", str(cache_dir() / "pyimclsts-shim")]
-    return argv
+        if args.adapter_arg:
+            raise UsageError("--adapter-arg is for library adapters; a subprocess adapter takes its own arguments")
+        return SubprocessSession(argv, name=name, encoding_param=suite.encoding_param, timeout=args.timeout,
+                                 hello_timeout=max(30.0, args.timeout),  # start-up (a JVM, class generation) takes longer
+                                 memory_limit=args.memory_limit * 1024 * 1024)
+    return LibrarySession(load_library_adapter(name, suite, adapter_arguments(args)), name)
 
 
-def select(cases: list[dict], args) -> list[dict]:
-    unknown = set(args.message) - set(load_definitions().by_abbrev)
+def selection(args):
+    """The suite, every case of its corpus, and the cases the options select."""
+    from .files import open_corpus
+
+    suite, everything = open_corpus(args.suite, args.vectors)
+    args.edition = args.edition or suite.editions[0]
+    if args.edition not in suite.editions:
+        raise UsageError(f"unknown edition {args.edition!r} of the suite {suite.name!r} "
+                         f"(editions: {', '.join(suite.editions)})")
+    unknown = set(args.message) - {g.name for g in suite.groups}
     if unknown:
-        raise UsageError(f"unknown message(s): {', '.join(sorted(unknown))}")
-    return select_cases(cases, args.edition, args.message, args.id, args.tag)
+        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    return suite, everything, select_cases(everything, args.edition, args.message, args.id, args.tag)
 
 
 def command_list(args) -> int:
-    for case in select(load_cases(args.vectors), args):
-        print(f"{case['id']}\t{expectation(case, args.edition)}\t{case['clause']}")
+    _, _, cases = selection(args)
+    for case in cases:
+        print(f"{case.id}\t{expectation(case.data, args.edition)}\t{case.data['clause']}")
     return 0
 
 
@@ -122,31 +133,30 @@ def command_run(args) -> int:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
+    from .core.runner import run_cases
+    from .files import load_waivers
     from .render.terminal import print_result
-    from .runner import run_cases
-    from .waivers import WaiverError, load_waivers
 
-    name, argv = adapter_choice(args)
     targets = report_targets(args)
-    defs = load_definitions()
-    everything = load_cases(args.vectors)
-    cases = select(everything, args)
+    suite, everything, cases = selection(args)
+    name, argv = adapter_choice(args, suite)
     if not cases:
         raise UsageError("the selection matches no case")
     waivers, notes = {}, []
     if args.waivers:
         try:
-            waivers, notes = load_waivers(Path(args.waivers), {c["id"] for c in everything}, dt.date.today())
+            waivers, notes = load_waivers(Path(args.waivers), {c.id for c in everything}, dt.date.today())
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
     console = terminal()
-    session = open_session(name, argv, args.timeout)
+    session = open_session(name, argv, args, suite)
     try:
         with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       console=Console(stderr=True), transient=True, disable=args.no_progress) as bar:
             task = bar.add_task("running", total=None)
-            result = run_cases(session, cases, defs=defs, edition=args.edition, adapter=name, waivers=waivers,
-                               strict=args.strict, notes=notes, progress=lambda n: bar.update(task, completed=n))
+            result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
+                               waivers=waivers, strict=args.strict, notes=notes,
+                               progress=lambda n: bar.update(task, completed=n))
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
     finally:
@@ -154,7 +164,7 @@ def command_run(args) -> int:
     print_result(result, console)
     problems = write_reports(result, targets, console)
     if args.write_waivers:
-        from .waivers import waivers_document
+        from .core.waivers import waivers_document
         failing_ids = [c.id for c in result.cases if failing(c.verdict, strict=False)]
         reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
         problems += write_file(Path(args.write_waivers), json.dumps(waivers_document(failing_ids, reason), indent=1) + "\n",
@@ -177,7 +187,7 @@ def report_targets(args) -> dict[str, Path]:
     return targets
 
 
-def write_reports(result: RunResult, targets: dict[str, Path], console) -> int:
+def write_reports(result, targets: dict[str, Path], console) -> int:
     """Write each requested report and say where; a report that cannot be written is reported and skipped.
     Returns the number of reports that could not be written."""
     if not targets:
@@ -201,16 +211,23 @@ def write_file(path: Path, text: str, what: str, console) -> int:
 
 
 def command_report(args) -> int:
+    from .files import read_result
     from .render.terminal import print_result
 
     targets = report_targets(args)
     try:
-        result = RunResult.from_dict(json.loads(Path(args.result).read_text(encoding="utf-8")))
-    except (OSError, ValueError) as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+        result = read_result(Path(args.result))
+    except ValueError as exc:  # not JSON, unreadable, or not a valid result
         raise UsageError(f"cannot read result {args.result}: {exc}") from exc
     console = terminal()
     print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
+
+
+def command_generate(args) -> int:
+    from .suites import load_suite
+
+    return load_suite(args.suite).generate(check=args.check)
 
 
 def terminal():
@@ -230,13 +247,27 @@ def positive_seconds(text: str) -> float:
     return value
 
 
+def megabytes(text: str) -> int:
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number of megabytes (0: no limit)")
+    return int(text)
+
+
+def add_suite(parser) -> None:
+    parser.add_argument("--suite", default=suite_names()[0], choices=suite_names(),
+                        help="imc (default): IMC messages 150-216; ros_acomms: ros_acomms_msgs types")
+
+
 def add_selection(parser) -> None:
-    parser.add_argument("--edition", default=EDITIONS[0], choices=EDITIONS,
-                        help="imc-5.4.30: what imcpy and deployed DUNE speak (default); imc-5.4.11: the seeds as written")
-    parser.add_argument("--message", action="append", default=[], metavar="ABBREV", help="only this message (repeatable)")
+    add_suite(parser)
+    parser.add_argument("--edition", help="the edition to judge against (default: the suite's first); imc: imc-5.4.30 "
+                                          "(what imcpy and deployed DUNE speak) or imc-5.4.11 (the seeds as written)")
+    parser.add_argument("--message", action="append", default=[], metavar="NAME",
+                        help="only this message or type (repeatable)")
     parser.add_argument("--id", action="append", default=[], metavar="GLOB", help="only case ids matching (repeatable)")
     parser.add_argument("--tag", action="append", default=[], help="only cases with this tag (repeatable), e.g. invalid")
-    parser.add_argument("--vectors", type=Path, metavar="DIR", help="vector files to use instead of the packaged corpus")
+    parser.add_argument("--vectors", type=Path, metavar="DIR",
+                        help="a suite folder (like vectors/imc) or folder of case files to use instead of the packaged corpus")
 
 
 def add_reports(parser) -> None:
@@ -247,22 +278,29 @@ def add_reports(parser) -> None:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="imc-conformance",
-        description="Conformance suite for IMC networking and acoustic messages. "
-                    "Start with: imc-conformance run --adapter imcpy",
+        description="Conformance suite for underwater vehicle networking messages: IMC (LSTS) and ros_acomms_msgs "
+                    "(WHOI). Start with: imc-conformance run --adapter imcpy",
         epilog="Exit codes: 0 every message passes, 1 a failure (FAIL, CRASH, TIMEOUT, WAIVER_STALE; NON_STRICT with "
-               "--strict), 2 a usage or adapter error.")
+               "--strict), 2 a usage, corpus or adapter error, 130 interrupted.")
     parser.add_argument("--version", action="version",
                         version=f"imc-conformance {importlib.metadata.version('imc-conformance')}")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="run the corpus against an implementation")
-    run.add_argument("--adapter", help="library adapter: imcpy (the default), pyimclsts, module:attribute or "
-                                       "file.py:attribute (an object, a class or a factory); subprocess shims: "
-                                       "imcpy-shim, pyimclsts-shim")
+    run = sub.add_parser("run", help="run a suite's corpus against an implementation")
+    run.add_argument("--adapter", help="a built-in adapter of the suite (imc: imcpy, the default, pyimclsts, imcpy-shim, "
+                                       "pyimclsts-shim; ros_acomms: rosbags, the default, genpy), or a library adapter "
+                                       "as module:attribute or file.py:attribute (an object, a class or a factory)")
+    run.add_argument("--adapter-arg", action="append", default=[], metavar="NAME=VALUE",
+                     help="an argument for a library adapter's class or factory (repeatable)")
     run.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter speaking JSON lines (adapters/README.md); "
                                                           "split like a shell would, but never run by one")
     run.add_argument("--timeout", type=positive_seconds, default=5.0,
                      help="seconds per request for subprocess adapters (default 5)")
+    run.add_argument("--memory-limit", type=megabytes, default=DEFAULT_MEMORY_MB, metavar="MB",
+                     help=f"data memory a subprocess adapter may use (default {DEFAULT_MEMORY_MB}; 0: no limit): one "
+                          "that tries to allocate what a hostile length asks for fails instead of the machine")
     add_selection(run)
+    run.add_argument("--errata", metavar="KEY", help="the implementation errata that explain failures "
+                                                     "(default: the key the adapter's hello declares)")
     run.add_argument("--strict", action="store_true", help="NON_STRICT verdicts fail too")
     run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids with a reason and optional expiry")
     run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
@@ -276,9 +314,14 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("result", help="a file written by run --json")
     add_reports(rep)
     rep.set_defaults(func=command_report)
-    gen = sub.add_parser("generate", help="rebuild vectors/imc/cases and the coverage table from the definitions")
+    gen = sub.add_parser("generate", help="rebuild a suite's case files and coverage table from its definitions")
+    add_suite(gen)
     gen.add_argument("--check", action="store_true", help="only report drift; exit 1 if any")
-    gen.set_defaults(func=lambda a: importlib.import_module("imc_conformance.corpus.build").main(["--check"] if a.check else []))
+    gen.set_defaults(func=command_generate)
+    from .suites import load_suite
+
+    for name in suite_names():
+        load_suite(name).commands(sub)
     return parser
 
 
@@ -286,7 +329,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (UsageError, CorpusError) as exc:
+    except (UsageError, CorpusError, WaiverError) as exc:
         print(f"imc-conformance: {printable(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # before any case ran (loading, starting the adapter): nothing to report

@@ -7,7 +7,3 @@ from pathlib import Path
 _HERE = Path(__file__).resolve().parent
 # Installed: the vectors are package data next to this module; in a checkout they sit beside conformance/.
 VECTORS = _HERE / "vectors" if (_HERE / "vectors").is_dir() else _HERE.parent / "vectors"
-
-
-def imc_data(*parts: str) -> Path:
-    return VECTORS.joinpath("imc", *parts)

@@ -1,21 +1,58 @@
-"""Shared fixtures: the definitions, the corpus, and the real implementations' adapters."""
+"""Shared fixtures: the IMC suite, its definitions and cases, and the real implementations' adapters."""
 
 from __future__ import annotations
 
+import subprocess
+from pathlib import Path
+
 import pytest
 
-from imc_conformance.corpus_data import load_cases
-from imc_conformance.definitions import load_definitions
+from imc_conformance.files import open_corpus
+
+CHECKOUT = Path(__file__).resolve().parents[1]
+_BEFORE = pytest.StashKey[str | None]()
+
+
+def checkout_state() -> str | None:
+    """What git sees changed or added in the checkout (None outside a git checkout)."""
+    try:
+        done = subprocess.run(["git", "status", "--porcelain", "--untracked-files=all"], cwd=CHECKOUT,
+                              capture_output=True, text=True, timeout=60)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return done.stdout if done.returncode == 0 else None
+
+
+def pytest_sessionstart(session):
+    session.config.stash[_BEFORE] = checkout_state()
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Tests never write into the checkout: a run that changed it fails, naming what changed."""
+    before, after = session.config.stash.get(_BEFORE, None), checkout_state()
+    if before is None or after is None or after == before:
+        return
+    changed = sorted(set(after.splitlines()) - set(before.splitlines()))
+    reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line(f"the tests wrote into the checkout: {', '.join(changed) or 'files changed back'}", red=True)
+    session.exitstatus = pytest.ExitCode.TESTS_FAILED
 
 
 @pytest.fixture(scope="session")
-def defs():
-    return load_definitions()
+def suite():
+    return open_corpus("imc")[0]
+
+
+@pytest.fixture(scope="session")
+def defs(suite):
+    return suite.defs
 
 
 @pytest.fixture(scope="session")
 def cases():
-    return load_cases()
+    """The IMC corpus as the runner sees it (``Case``: id, group, kind, data)."""
+    return open_corpus("imc")[1]
 
 
 @pytest.fixture(scope="session")
@@ -28,3 +65,9 @@ def imcpy_adapter():
 def pyimclsts_adapter():
     from imc_conformance.adapters.pyimclsts_adapter import adapter
     return adapter()
+
+
+@pytest.fixture(scope="session")
+def records(cases):
+    """The IMC corpus's case records, as the vector files hold them."""
+    return [c.data for c in cases]

@@ -15,8 +15,8 @@ import sys
 import time
 from pathlib import Path
 
-from imc_conformance import codec
-from imc_conformance.definitions import load_definitions
+from imc_conformance.suites.imc import codec
+from imc_conformance.suites.imc.definitions import load_definitions
 
 DEFS = load_definitions()
 MODE = sys.argv[1] if len(sys.argv) > 1 else "reference"

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import json
 
-from imc_conformance import codec
-from imc_conformance.corpus import samples
-from imc_conformance.corpus.build import build_corpus
-from imc_conformance.definitions import lint_definitions
-from imc_conformance.paths import imc_data
+from imc_conformance.suites.imc import codec
+from imc_conformance.suites.imc.corpus import samples
+from imc_conformance.suites.imc.corpus.build import build_corpus
+from imc_conformance.suites.imc.definitions import lint_definitions
+from imc_conformance.suites.imc.paths import imc_data
 
 
 def test_committed_corpus_has_not_drifted(defs):
@@ -23,16 +23,16 @@ def test_generation_is_deterministic(defs):
     assert build_corpus(defs) == build_corpus(defs)
 
 
-def test_case_ids_are_unique_and_hierarchical(cases):
-    ids = [c["id"] for c in cases]
+def test_case_ids_are_unique_and_hierarchical(records):
+    ids = [c["id"] for c in records]
     assert len(ids) == len(set(ids))
-    for c in cases:
+    for c in records:
         suite, message, *rest = c["id"].split("/")
         assert suite == "imc" and rest and message in c["definitions"]
 
 
-def test_every_case_pins_the_definitions_it_uses(cases, defs):
-    for c in cases:
+def test_every_case_pins_the_definitions_it_uses(records, defs):
+    for c in records:
         for abbrev, digest in c["definitions"].items():
             assert defs[abbrev].hash == digest, c["id"]
 
@@ -57,22 +57,22 @@ def test_examples_reproduce_the_imc_wire_cross_check_frames(defs):
             assert codec.encode(defs, e["message"], order).hex() == frame, (e["message"]["abbrev"], order)
 
 
-def test_every_message_has_the_required_coverage(cases, defs):
+def test_every_message_has_the_required_coverage(records, defs):
     for m in defs.suite_messages:
-        mine = [c for c in cases if c["id"].split("/")[1] == m.abbrev]
+        mine = [c for c in records if c["id"].split("/")[1] == m.abbrev]
         assert sum(c["expect"] == "valid" for c in mine) >= 8, m.abbrev
 
 
-def test_valid_frames_decode_to_their_message_in_the_reference_codec(cases, defs):
-    for c in cases:
+def test_valid_frames_decode_to_their_message_in_the_reference_codec(records, defs):
+    for c in records:
         if c["expect"] == "valid":
             for order, frame in c["frames"].items():
                 assert codec.decode(defs, bytes.fromhex(frame)) == c["message"], (c["id"], order)
 
 
-def test_invalid_frames_break_exactly_their_rule_in_the_reference_codec(cases, defs):
+def test_invalid_frames_break_exactly_their_rule_in_the_reference_codec(records, defs):
     import pytest
-    for c in cases:
+    for c in records:
         if c["expect"] != "invalid":
             continue
         for check in c["checks"]:

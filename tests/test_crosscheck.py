@@ -13,55 +13,46 @@ import fnmatch
 import imcpy
 import pytest
 
-from imc_conformance import codec
-from imc_conformance.corpus_data import implementation_errata, load_errata
-from imc_conformance.evaluate import Judge, Verdict, expectation, plan, worst
-from imc_conformance.library import ask
+from harness import verdicts
+
+from imc_conformance.core.cases import expectation
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.suites.imc import codec
 
 EDITION = "imc-5.4.30"  # what imcpy 1.1.2 speaks
 PASSING = {Verdict.PASS, Verdict.IMPL_DEFINED}
 
 
-def run(adapter, cases, defs, edition=EDITION):
-    judge, emits = Judge(defs), set(adapter.hello()["byte_orders"])
-    verdicts = {}
-    for case in cases:
-        results = [judge.judge(case, edition, r, ask(adapter, "imc", case, r)) for r in plan(case, edition, emits)]
-        if results:
-            verdicts[case["id"]] = (worst(results), results)
-    return verdicts
-
-
-def unexplained(verdicts, implementation):
+def unexplained(suite, verdicts, implementation):
     return {cid: [r.detail for r in results if r.verdict not in PASSING][:2]
             for cid, (v, results) in verdicts.items()
-            if v not in PASSING and not implementation_errata(cid, implementation)}
+            if v not in PASSING and not suite.implementation_errata(cid, implementation)}
 
 
-def stale_globs(verdicts, implementation):
+def stale_globs(suite, verdicts, implementation):
     failing = [cid for cid, (v, _) in verdicts.items() if v not in PASSING]
-    return [(e["id"], g) for e in load_errata() if e.get("implementation") == implementation
+    return [(e["id"], g) for e in suite.errata if e.get("implementation") == implementation
             for g in e["cases"] if not fnmatch.filter(failing, g)]
 
 
 @pytest.fixture(scope="module")
-def imcpy_verdicts(imcpy_adapter, cases, defs):
+def imcpy_verdicts(imcpy_adapter, cases):
     # imcpy's verdict on erratum I2 cases depends on memory past the frame: not reproducible, not judged here
-    return run(imcpy_adapter, [c for c in cases if c.get("erratum") != "I2"], defs)
+    return verdicts(imcpy_adapter, [c for c in cases if c.data.get("erratum") != "I2"], EDITION)
 
 
-def test_imcpy_agrees_with_every_vector_but_documented_errata(imcpy_verdicts):
-    assert unexplained(imcpy_verdicts, "imcpy") == {}
+def test_imcpy_agrees_with_every_vector_but_documented_errata(suite, imcpy_verdicts):
+    assert unexplained(suite, imcpy_verdicts, "imcpy") == {}
     counts = collections.Counter(v for v, _ in imcpy_verdicts.values())
     assert counts[Verdict.PASS] > 3000 and counts[Verdict.ADAPTER_ERROR] == 0
 
 
-def test_imcpy_errata_are_still_observed(imcpy_verdicts):
-    assert stale_globs(imcpy_verdicts, "imcpy") == []
+def test_imcpy_errata_are_still_observed(suite, imcpy_verdicts):
+    assert stale_globs(suite, imcpy_verdicts, "imcpy") == []
 
 
-def test_every_valid_le_frame_is_imcpys_serialization(imcpy_verdicts, cases):
-    valid = [c for c in cases if expectation(c, EDITION) == "valid"]
+def test_every_valid_le_frame_is_imcpys_serialization(imcpy_verdicts, records):
+    valid = [c for c in records if expectation(c, EDITION) == "valid"]
     assert len(valid) > 900
     for case in valid:
         results = {r.check: r for r in imcpy_verdicts[case["id"]][1]}
@@ -70,21 +61,21 @@ def test_every_valid_le_frame_is_imcpys_serialization(imcpy_verdicts, cases):
         assert "encode-be" not in results  # imcpy only emits little-endian: not applicable
 
 
-def test_every_invalid_case_is_rejected_by_imcpy(imcpy_verdicts, cases):
-    invalid = [c for c in cases if expectation(c, EDITION) == "invalid" and c.get("erratum") != "I2"]
+def test_every_invalid_case_is_rejected_by_imcpy(imcpy_verdicts, records):
+    invalid = [c for c in records if expectation(c, EDITION) == "invalid" and c.get("erratum") != "I2"]
     assert len(invalid) > 2400
     for case in invalid:
         verdict, results = imcpy_verdicts[case["id"]]
         assert verdict in (Verdict.PASS, Verdict.NON_STRICT), (case["id"], [r.detail for r in results])
 
 
-def test_i2_cases_keep_dune_from_reading_an_empty_list(cases):
+def test_i2_cases_keep_dune_from_reading_an_empty_list(records):
     """Erratum I2: DUNE takes the missing list count from the CRC bytes, then reads past the frame.
 
     The generator keeps that count non-zero (a zero count would be an empty list, silently accepted);
     imcpy's verdict after that is memory-dependent, so only that it returns is required of it.
     """
-    i2 = [c for c in cases if c.get("erratum") == "I2"]
+    i2 = [c for c in records if c.get("erratum") == "I2"]
     assert len(i2) == 6
     for case in i2:
         (order, frame), = case["frames"].items()
@@ -96,10 +87,10 @@ def test_i2_cases_keep_dune_from_reading_an_empty_list(cases):
             pass
 
 
-def test_imcpy_error_text_per_rule(imcpy_adapter, cases):
+def test_imcpy_error_text_per_rule(imcpy_adapter, records):
     """The documented table: the DUNE error text imcpy gives for each rule (adapters/README.md)."""
     texts = collections.defaultdict(set)
-    for case in cases:
+    for case in records:
         if expectation(case, EDITION) != "invalid" or case.get("erratum") == "I2":
             continue
         (order, frame), = ((o, f) for o, f in case["frames"].items())
@@ -124,10 +115,10 @@ IMCPY_ERROR_TEXTS = {
 }
 
 
-def test_accepted_frames_keep_every_byte_in_dune(cases, defs):
+def test_accepted_frames_keep_every_byte_in_dune(records, defs):
     """Acceptable cases DUNE accepts: its C++ carries every value unchanged (re-serialising gives the frame)."""
     checked = 0
-    for case in cases:
+    for case in records:
         if expectation(case, EDITION) != "acceptable" or case["reference"] != "accept":
             continue
         for check in case["checks"]:
@@ -140,9 +131,9 @@ def test_accepted_frames_keep_every_byte_in_dune(cases, defs):
     assert checked > 200
 
 
-def test_acceptable_cases_match_the_reference_behaviour(imcpy_verdicts, cases):
+def test_acceptable_cases_match_the_reference_behaviour(imcpy_verdicts, records):
     """imc-wire.md lists what real receivers do; imcpy, DUNE's codec, must do exactly that."""
-    for case in cases:
+    for case in records:
         if expectation(case, EDITION) != "acceptable" or case["id"] not in imcpy_verdicts:
             continue
         for r in imcpy_verdicts[case["id"]][1]:
@@ -151,14 +142,14 @@ def test_acceptable_cases_match_the_reference_behaviour(imcpy_verdicts, cases):
 
 
 @pytest.fixture(scope="module")
-def pyimclsts_verdicts(pyimclsts_adapter, cases, defs):
-    return run(pyimclsts_adapter, cases, defs)
+def pyimclsts_verdicts(pyimclsts_adapter, cases):
+    return verdicts(pyimclsts_adapter, cases, EDITION)
 
 
-def test_pyimclsts_produces_the_same_be_bytes(pyimclsts_verdicts, cases):
+def test_pyimclsts_produces_the_same_be_bytes(suite, pyimclsts_verdicts, records):
     checked = 0
-    for case in cases:
-        if expectation(case, EDITION) != "valid" or implementation_errata(case["id"], "pyimclsts"):
+    for case in records:
+        if expectation(case, EDITION) != "valid" or suite.implementation_errata(case["id"], "pyimclsts"):
             continue
         results = {r.check: r for r in pyimclsts_verdicts[case["id"]][1]}
         assert results["encode-be"].verdict is Verdict.PASS, (case["id"], results["encode-be"].detail)
@@ -166,8 +157,8 @@ def test_pyimclsts_produces_the_same_be_bytes(pyimclsts_verdicts, cases):
     assert checked > 900
 
 
-def test_pyimclsts_failures_are_exactly_its_documented_defects(pyimclsts_verdicts):
-    assert unexplained(pyimclsts_verdicts, "pyimclsts") == {}
-    assert stale_globs(pyimclsts_verdicts, "pyimclsts") == []
+def test_pyimclsts_failures_are_exactly_its_documented_defects(suite, pyimclsts_verdicts):
+    assert unexplained(suite, pyimclsts_verdicts, "pyimclsts") == {}
+    assert stale_globs(suite, pyimclsts_verdicts, "pyimclsts") == []
     failing = sum(1 for v, _ in pyimclsts_verdicts.values() if v not in PASSING)
     assert failing > 1000  # no CRC and no sync check: the report must show it

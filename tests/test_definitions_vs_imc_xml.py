@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import pytest
 
-from imc_conformance.corpus.invalid import HIGHEST_IMC_ID, UNUSED_ID
-from imc_conformance.imc_xml import fetch_imc_xml, parse_imc_xml
-from imc_conformance.paths import imc_data
+from imc_conformance.suites.imc.corpus.invalid import HIGHEST_IMC_ID, UNUSED_ID
+from imc_conformance.suites.imc.imc_xml import fetch_imc_xml, parse_imc_xml
+from imc_conformance.suites.imc.paths import imc_data
 
 XML_EDITION = "imc-5.4.30"  # the IMC version of imcpy 1.1.2's IMC.xml
 SEED_EDITION = "imc-5.4.11"

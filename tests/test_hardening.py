@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from imc_conformance.cli import main
-from imc_conformance.paths import imc_data
+from imc_conformance.suites.imc.paths import imc_data
 
 HERE = Path(__file__).resolve().parent
 HOSTILE = HERE / "hostile_adapter.py"
@@ -245,9 +245,9 @@ def test_a_timeout_that_is_not_a_positive_number_is_refused(value, adapter, caps
 # ---------------------------------------------------------------- 9. library adapters, loaded with care
 
 LIBRARY = """
-from imc_conformance import codec
+from imc_conformance.suites.imc import codec
 from imc_conformance.adapter_api import Rejected
-from imc_conformance.definitions import load_definitions
+from imc_conformance.suites.imc.definitions import load_definitions
 D = load_definitions()
 class Reference:
     def hello(self): return {"implementation": "reference as a class", "suites": ["imc"], "byte_orders": ["le", "be"]}

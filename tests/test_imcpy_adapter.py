@@ -5,11 +5,11 @@ from __future__ import annotations
 import imcpy
 import pytest
 
-from imc_conformance import codec
+from imc_conformance.suites.imc import codec
 from imc_conformance.adapter_api import Rejected, Unsupported
 from imc_conformance.adapters.imcpy_adapter import ImcpyAdapter, adapter
-from imc_conformance.crc16 import crc16
-from imc_conformance.definitions import load_definitions
+from imc_conformance.suites.imc.crc16 import crc16
+from imc_conformance.suites.imc.definitions import load_definitions
 
 DEFS = load_definitions()
 HEADER = {"timestamp": 1700000000.5, "src": 30, "src_ent": 42, "dst": 0x1234, "dst_ent": 7}
@@ -57,7 +57,7 @@ def sample(abbrev: str) -> dict:
 
 def test_hello(imc):
     assert imc.hello() == {"implementation": "imcpy 1.1.2 (DUNE C++ codec, IMC 5.4.30)",
-                           "suites": ["imc"], "byte_orders": ["le"]}
+                           "suites": ["imc"], "byte_orders": ["le"], "errata": "imcpy"}
 
 
 @pytest.mark.parametrize("abbrev", [m.abbrev for m in DEFS.messages])

@@ -9,37 +9,24 @@ outside the family its bug can reach. Two mutants make choices imc-wire permits 
 from __future__ import annotations
 
 import collections
-import json
 import math
 from dataclasses import dataclass
 from typing import Callable
 
 import mutants
 import pytest
+from harness import verdicts as run
 
-from imc_conformance.corpus.coverage import frame_rules
-
-from imc_conformance.evaluate import Judge, Verdict, expectation, plan, worst
-from imc_conformance.library import ask
-from imc_conformance.paths import imc_data
-from imc_conformance.values import text_bytes
+from imc_conformance.core.cases import expectation
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.suites.imc.corpus.coverage import frame_rules
+from imc_conformance.suites.imc.values import text_bytes
 
 EDITION = "imc-5.4.30"
 PASSING = {Verdict.PASS, Verdict.IMPL_DEFINED}
 FAIL, NON_STRICT = Verdict.FAIL, Verdict.NON_STRICT
 SURVIVORS = (mutants.RefusesTrailingBytes, mutants.LittleEndianOnly)
 KILLABLE = tuple(m for m in mutants.MUTANTS if m not in SURVIVORS)
-
-
-def run(adapter, cases, defs) -> dict:
-    """case id -> (case verdict, check results) for every case of the edition."""
-    judge, emits = Judge(defs), set(adapter.hello()["byte_orders"])
-    verdicts = {}
-    for case in cases:
-        results = [judge.judge(case, EDITION, r, ask(adapter, "imc", case, r)) for r in plan(case, EDITION, emits)]
-        if results:
-            verdicts[case["id"]] = (worst(results), results)
-    return verdicts
 
 
 def caught(verdicts: dict) -> dict:
@@ -53,7 +40,7 @@ def verdicts_of(cases, defs):
 
     def verdicts_of(adapter_class):
         if adapter_class not in cache:
-            cache[adapter_class] = run(adapter_class(defs), cases, defs)
+            cache[adapter_class] = run(adapter_class(defs), cases, EDITION)
         return cache[adapter_class]
 
     return verdicts_of
@@ -61,7 +48,7 @@ def verdicts_of(cases, defs):
 
 @pytest.fixture(scope="module")
 def cases_by_id(cases):
-    return {c["id"]: c for c in cases}
+    return {c.id: c.data for c in cases}
 
 
 # ---------------------------------------------------------------- what catching each mutant means

@@ -18,11 +18,11 @@ from pathlib import Path
 
 import pytest
 
-from imc_conformance import codec
+from imc_conformance.suites.imc import codec
 from imc_conformance.adapter_api import Rejected, Unsupported
-from imc_conformance.crc16 import crc16
-from imc_conformance.definitions import load_definitions
-from imc_conformance.imc_xml import IMCPY_VERSION, fetch_imc_xml
+from imc_conformance.suites.imc.crc16 import crc16
+from imc_conformance.suites.imc.definitions import load_definitions
+from imc_conformance.suites.imc.imc_xml import IMCPY_VERSION, fetch_imc_xml
 
 pya = pytest.importorskip("imc_conformance.adapters.pyimclsts_adapter")
 
@@ -124,7 +124,8 @@ def assert_round_trip(ad, msg):
 # ---------------------------------------------------------------- contract
 
 def test_hello(ad):
-    assert ad.hello() == {"implementation": "pyimclsts 0.1.2.1", "suites": ["imc"], "byte_orders": ["be", "le"]}
+    assert ad.hello() == {"implementation": "pyimclsts 0.1.2.1", "suites": ["imc"], "byte_orders": ["be", "le"],
+                          "errata": "pyimclsts"}
 
 
 def test_unsupported_suite_and_byte_order(ad):

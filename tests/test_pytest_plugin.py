@@ -10,10 +10,10 @@ pytest_plugins = ["pytester"]
 BROKEN_ADAPTER = '''
 import struct
 
-from imc_conformance import codec
+from imc_conformance.suites.imc import codec
 from imc_conformance.adapter_api import Rejected
-from imc_conformance.crc16 import crc16
-from imc_conformance.definitions import load_definitions
+from imc_conformance.suites.imc.crc16 import crc16
+from imc_conformance.suites.imc.definitions import load_definitions
 
 DEFS = load_definitions()
 
@@ -59,7 +59,7 @@ def test_a_broken_adapter_file_is_caught(pytester):
     result = pytester.runpytest(f"--conformance-adapter={pytester.path / 'broken_adapter.py'}:adapter",
                                 "--conformance-id=imc/LblRange/crc/*", "--conformance-id=imc/LblRange/minimal")
     result.assert_outcomes(passed=1, failed=16)  # every CRC case, in both byte orders, catches it
-    result.stdout.fnmatch_lines(["*imc/LblRange/crc/footer-first-byte/le (imc-wire#crc): FAIL: decode-le: FAIL accepted an invalid frame*"])
+    result.stdout.fnmatch_lines(["*imc/LblRange/crc/footer-first-byte/le (imc-wire#crc): FAIL: decode-le: accepted an invalid frame (rule crc)*"])
 
 
 def test_nothing_is_collected_without_the_option(pytester):

@@ -16,20 +16,20 @@ from pathlib import Path
 import pytest
 from jsonschema import Draft202012Validator
 
-from imc_conformance import codec
+from imc_conformance.suites.imc import codec
 from imc_conformance.adapter_api import Rejected
-from imc_conformance.evaluate import ByteDiff, Verdict
-from imc_conformance.library import LibrarySession
+from imc_conformance.core.results import ByteDiff
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.sessions.library import LibrarySession
 from imc_conformance.paths import VECTORS
 from imc_conformance.render import RENDERERS, html as html_module
 from imc_conformance.render.html import render_html
 from imc_conformance.render.json_result import render_json
 from imc_conformance.render.junit import render_junit
 from imc_conformance.render.markdown import render_markdown
-from imc_conformance.results import RunResult
-from imc_conformance.runner import run_cases
+from imc_conformance.core.results import RunResult
+from imc_conformance.core.runner import run_cases
 
-REPO = Path(__file__).resolve().parents[1]
 SCHEMA = json.loads((VECTORS / "schema" / "result.schema.json").read_text(encoding="utf-8"))
 CHROMIUM = Path("/usr/bin/chromium")
 EVIL = "<script>alert(1)</script> <img src=x onerror=alert(2)> ]]> \x00 \x1b[31mred\x1b[0m a|b `tick` & done"
@@ -63,15 +63,13 @@ class BrokenEncoder:
 
 
 @pytest.fixture(scope="module")
-def imcpy_result(defs, cases, imcpy_adapter):
-    return run_cases(LibrarySession(imcpy_adapter, "imcpy"), cases, defs=defs, edition="imc-5.4.30", adapter="imcpy",
-                     errata_name="imcpy")
+def imcpy_result(suite, cases, imcpy_adapter):
+    return run_cases(LibrarySession(imcpy_adapter, "imcpy"), suite, cases, edition="imc-5.4.30", adapter="imcpy")
 
 
 @pytest.fixture(scope="module")
-def broken_result(defs, cases):
-    return run_cases(LibrarySession(BrokenEncoder(defs), "broken"), cases, defs=defs, edition="imc-5.4.30",
-                     adapter="broken")
+def broken_result(suite, defs, cases):
+    return run_cases(LibrarySession(BrokenEncoder(defs), "broken"), suite, cases, edition="imc-5.4.30", adapter="broken")
 
 
 @pytest.fixture(scope="module")
@@ -343,9 +341,7 @@ def test_html_report_in_headless_chromium(broken_result, tmp_path):
     legend = [r for r in dom.ranges if r["case"] == FAILING_CASE and r["data-field"] == "LblRange.range"]
     assert legend and all(r["text"].endswith("= LblRange.range") for r in legend)
 
-    shot = REPO / "reports" / "html-report.png"
-    shot.parent.mkdir(exist_ok=True)
-    shot.unlink(missing_ok=True)
+    shot = tmp_path / "html-report.png"  # never into the checkout
     chromium(f"--screenshot={shot}", "--window-size=1400,2400", url, profile=tmp_path / "profile-shot")
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert shot.stat().st_size > 10_000

@@ -16,30 +16,32 @@ from pathlib import Path
 
 import pytest
 
-from imc_conformance.corpus_data import load_cases
-from imc_conformance.definitions import load_definitions
-from imc_conformance.evaluate import Judge, Verdict, expectation, plan, worst
-from imc_conformance.hello import check_hello
-from imc_conformance.library import LibrarySession
-from imc_conformance.session import AdapterStartError, Job
-from imc_conformance.subprocess_session import MAX_RESTARTS, SubprocessSession
+from harness import verdicts as run_verdicts
+
+from imc_conformance.core.cases import expectation
+from imc_conformance.core.hello import check_hello
+from imc_conformance.core.session import AdapterStartError, Job
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.files import open_corpus
+from imc_conformance.sessions.library import LibrarySession
+from imc_conformance.sessions.subprocess import MAX_RESTARTS, SubprocessSession
 
 EDITION = "imc-5.4.30"
 EDITIONS = ("imc-5.4.11", "imc-5.4.30")
 ROOT = Path(__file__).resolve().parent.parent
 HOSTILE = Path(__file__).resolve().parent / "hostile_adapter.py"
-CASES = load_cases()
-SELECTION = [c for c in CASES if c["id"].split("/")[1] in ("LblRange", "AcousticStatus")]
+SUITE, CASES = open_corpus("imc")
+KIND = SUITE.kinds["vector"]
+SELECTION = [c for c in CASES if c.group in ("LblRange", "AcousticStatus")]
 TRIGGER = "imc/LblRange/realistic/crosscheck"
-TRIGGER_FRAME = next(c for c in SELECTION if c["id"] == TRIGGER)["frames"]["le"]
-JUDGE = Judge(load_definitions())
+TRIGGER_FRAME = next(c for c in SELECTION if c.id == TRIGGER).data["frames"]["le"]
 
 
 @contextmanager
 def session(argv: list[str], **options):
     """A session that closes; programs get 30 s to start, however short the per-request timeout."""
     name = argv[2] if len(argv) > 2 else argv[0]
-    s = SubprocessSession(argv, name=name, **{"hello_timeout": 30, **options})
+    s = SubprocessSession(argv, name=name, encoding_param="byte_order", **{"hello_timeout": 30, **options})
     try:
         yield s
     finally:
@@ -50,57 +52,50 @@ def program(mode: str) -> list[str]:
     return [sys.executable, str(HOSTILE), mode, TRIGGER_FRAME]
 
 
-def collect(s, cases, editions=(EDITION,)) -> tuple[set[str], dict]:
-    """The orders ``s`` emits, and its answer to every check of ``cases`` under ``editions``.
-
-    Answers are keyed by (case id, check); a check planned under both editions is asked once.
-    """
-    emits = set(s.hello()["byte_orders"])
+def jobs_of(cases, editions=(EDITION,)) -> dict:
+    """(case id, check) -> Job for every check of ``cases`` under ``editions`` (asked once if in both)."""
     jobs = {}
     for case in cases:
         for edition in editions:
-            for request in plan(case, edition, emits):
-                jobs.setdefault((case["id"], request.check), Job(f"{case['id']}#{request.check}", "imc", case, request))
+            for request in KIND.plan(case.data, edition, {"le", "be"}):
+                jobs.setdefault((case.id, request.check), Job(f"{case.id}#{request.check}", "imc", case.id, request))
+    return jobs
+
+
+def answers_of(s, cases) -> dict:
+    """The session's raw answer to every check of ``cases``, by (case id, check): what the runner judges."""
+    jobs = jobs_of(cases)
     answers = {}
     for job, answer in s.run(jobs.values()):
-        key = (job.case["id"], job.request.check)
+        key = (job.case_id, job.request.check)
         assert key not in answers, f"{key} answered twice"
         answers[key] = answer
     assert answers.keys() == jobs.keys()
-    return emits, answers
+    return answers
 
 
-def checks(cases, emits, answers, edition=EDITION) -> dict[str, list]:
-    """Case id -> the CheckResults of its checks under ``edition``."""
-    out = {}
-    for case in cases:
-        results = [JUDGE.judge(case, edition, r, answers[case["id"], r.check]) for r in plan(case, edition, emits)]
-        if results:
-            out[case["id"]] = results
-    return out
-
-
-def verdicts(cases, emits, answers, edition=EDITION) -> dict[str, Verdict]:
-    return {cid: worst(results) for cid, results in checks(cases, emits, answers, edition).items()}
+def verdicts(s, cases, edition=EDITION) -> dict[str, Verdict]:
+    """Case id -> verdict, through the runner."""
+    return {cid: v for cid, (v, _) in run_verdicts(s, cases, edition).items()}
 
 
 @pytest.fixture(scope="module")
 def reference() -> dict[str, Verdict]:
     with session(program("reference")) as s:
-        return verdicts(SELECTION, *collect(s, SELECTION))
+        return verdicts(s, SELECTION)
 
 
 # ---------------------------------------------------------------- broken programs
 
 def test_the_trigger_frame_belongs_to_one_case_only():
-    owners = [c["id"] for c in SELECTION if TRIGGER_FRAME in c.get("frames", {}).values()]
+    owners = [c.id for c in SELECTION if TRIGGER_FRAME in c.data.get("frames", {}).values()]
     assert owners == [TRIGGER]
 
 
 def test_the_reference_program_passes_the_selection(reference):
     assert set(reference.values()) <= {Verdict.PASS, Verdict.IMPL_DEFINED}
     assert reference[TRIGGER] == Verdict.PASS
-    assert reference.keys() == {c["id"] for c in SELECTION if plan(c, EDITION, {"le", "be"})}
+    assert reference.keys() == {c.id for c in SELECTION if KIND.plan(c.data, EDITION, {"le", "be"})}
 
 
 @pytest.mark.parametrize("name, verdict", [
@@ -114,20 +109,20 @@ def test_the_reference_program_passes_the_selection(reference):
 ])
 def test_a_broken_program_fails_only_the_case_that_triggers_it(reference, name, verdict):
     with session(program(name), timeout=1) as s:
-        got = verdicts(SELECTION, *collect(s, SELECTION))
+        got = verdicts(s, SELECTION)
     assert got == {**reference, TRIGGER: verdict}
 
 
 def test_the_failure_reason_names_what_happened():
     with session(program("garbage"), timeout=1) as s:
-        _, answers = collect(s, SELECTION)
+        answers = answers_of(s, SELECTION)
     assert answers[TRIGGER, "decode-le"].reason == ("adapter wrote a line that is not JSON: "
                                                     "Segmentation fault? no: just garbage on stdout")
 
 
 def test_stderr_is_kept_across_restarts():
     with session(program("crash"), timeout=1) as s:
-        _, answers = collect(s, SELECTION)
+        answers = answers_of(s, SELECTION)
         assert answers[TRIGGER, "decode-le"].reason == "adapter exited with code 3"
         assert "hostile: dying on the trigger frame" in s.stderr
         assert "[imc-conformance: restarting the adapter: adapter exited with code 3]" in s.stderr
@@ -135,14 +130,14 @@ def test_stderr_is_kept_across_restarts():
 
 def test_answers_in_any_order_are_matched_by_id(reference):
     with session(program("reversed")) as s:
-        assert verdicts(SELECTION, *collect(s, SELECTION)) == reference
+        assert verdicts(s, SELECTION) == reference
 
 
 def test_a_program_that_keeps_crashing_cannot_hang_the_run():
     cases = SELECTION[:40]
     start = time.perf_counter()
     with session(program("always-crashes"), timeout=2) as s:
-        emits, answers = collect(s, cases)
+        answers = answers_of(s, cases)
     kinds = [a.kind for a in answers.values()]
     # each restart blames one call; a roundtrip shares the answer to decoding its frame (CRASH too)
     inherited = [(cid, check) for (cid, check), a in answers.items() if check.startswith("roundtrip-")
@@ -155,11 +150,10 @@ def test_a_program_that_keeps_crashing_cannot_hang_the_run():
 
 def test_an_abandoned_run_leaves_the_session_usable(reference):
     with session(program("reference")) as s:
-        jobs = [Job(f"{c['id']}#{r.check}", "imc", c, r) for c in SELECTION for r in plan(c, EDITION, {"le", "be"})]
-        run = s.run(jobs)
+        run = s.run(jobs_of(SELECTION).values())
         next(run)
         run.close()  # with requests still in flight
-        assert verdicts(SELECTION, *collect(s, SELECTION)) == reference
+        assert verdicts(s, SELECTION) == reference
 
 
 RESTARTS_ONCE = """
@@ -179,7 +173,7 @@ for line in sys.stdin:
 
 def test_a_program_that_cannot_be_restarted_fails_the_remaining_jobs(tmp_path):
     with session([sys.executable, "-c", RESTARTS_ONCE, str(tmp_path / "started")], timeout=2) as s:
-        _, answers = collect(s, SELECTION[:10])
+        answers = answers_of(s, SELECTION[:10])
     assert {a.kind for a in answers.values()} == {"adapter-error"}
     assert {a.reason for a in answers.values()} == {
         "adapter could not be restarted: adapter exited with code 1 before answering hello; stderr: cannot start twice"}
@@ -188,20 +182,20 @@ def test_a_program_that_cannot_be_restarted_fails_the_remaining_jobs(tmp_path):
 # ---------------------------------------------------------------- long lines
 
 def test_a_65536_byte_frame_and_a_131_kb_answer_go_through(reference):
-    big = [c for c in SELECTION if max(map(len, c.get("frames", {"": ""}).values())) >= 2 * 65535]
-    assert {len(f) // 2 for c in big for f in c["frames"].values()} == {65535, 65536}
+    big = [c for c in SELECTION if max(map(len, c.data.get("frames", {"": ""}).values())) >= 2 * 65535]
+    assert {len(f) // 2 for c in big for f in c.data["frames"].values()} == {65535, 65536}
     with session(program("reference")) as s:
-        assert verdicts(big, *collect(s, big)) == {c["id"]: reference[c["id"]] for c in big}
-    assert {reference[c["id"]] for c in big} == {Verdict.PASS}
+        assert verdicts(s, big) == {c.id: reference[c.id] for c in big}
+    assert {reference[c.id] for c in big} == {Verdict.PASS}
 
 
 def test_a_line_over_max_line_is_an_adapter_error(reference):
     max_line = 100_000  # a valid 65535-byte frame is a 131 KB encode answer
-    too_long = {c["id"] for c in SELECTION
-                if expectation(c, EDITION) == "valid" and max(map(len, c["frames"].values())) > max_line}
+    too_long = {c.id for c in SELECTION
+                if expectation(c.data, EDITION) == "valid" and max(map(len, c.data["frames"].values())) > max_line}
     assert "imc/AcousticStatus/text/info/max-payload" in too_long
     with session(program("reference"), max_line=max_line) as s:
-        got = verdicts(SELECTION, *collect(s, SELECTION))
+        got = verdicts(s, SELECTION)
     assert got == {**reference, **dict.fromkeys(too_long, Verdict.ADAPTER_ERROR)}
 
 
@@ -226,15 +220,15 @@ ANSWER_HELLO = "import json, time; json.loads(input()); print(json.dumps({reply!
      "the adapter's hello needs 'implementation': a non-empty string naming it"),
 ])
 def test_start_up_errors_are_clear(argv, message):
-    s = SubprocessSession(argv, name="broken", timeout=30)
+    s = SubprocessSession(argv, name="broken", encoding_param="byte_order", timeout=30)
     with pytest.raises(AdapterStartError) as error:
-        check_hello(s.hello(), "imc")
+        check_hello(s.hello(), "imc", "byte_orders", ("le", "be"))
     assert str(error.value).startswith(message)
     s.close()
 
 
 def test_a_program_that_never_answers_hello_times_out():
-    s = SubprocessSession(python("import time; time.sleep(60)"), name="silent", timeout=0.5)
+    s = SubprocessSession(python("import time; time.sleep(60)"), name="silent", encoding_param="byte_order", timeout=0.5)
     start = time.perf_counter()
     with pytest.raises(AdapterStartError, match=r"^adapter did not answer hello within 0\.5 s$"):
         s.hello()
@@ -245,7 +239,7 @@ def test_a_file_that_is_not_executable_cannot_start(tmp_path):
     script = tmp_path / "adapter.py"
     script.write_text("print('never')\n")
     with pytest.raises(AdapterStartError, match=r"cannot start adapter \[.*\]: Permission denied"):
-        SubprocessSession([str(script)], name="not-executable").hello()
+        SubprocessSession([str(script)], name="not-executable", encoding_param="byte_order").hello()
 
 
 def test_a_shim_answers_bad_requests_without_dying():
@@ -267,19 +261,11 @@ def test_a_shim_answers_bad_requests_without_dying():
 # ---------------------------------------------------------------- the shims against the library adapters
 
 def assert_same_verdicts(library, shim) -> None:
-    emits_lib, answers_lib = collect(library, CASES, EDITIONS)
-    start = time.perf_counter()
-    emits_shim, answers_shim = collect(shim, CASES, EDITIONS)
-    seconds = time.perf_counter() - start
-    print(f"{shim.name}: {len(CASES)} cases, {len(answers_shim)} checks in {seconds:.2f} s: "
-          f"{len(CASES) / seconds:.0f} cases/s through the subprocess session")
-    assert emits_shim == emits_lib
     for edition in EDITIONS:
-        lib, sub = (checks(CASES, emits, answers, edition)
-                    for emits, answers in ((emits_lib, answers_lib), (emits_shim, answers_shim)))
-        assert {cid: worst(r) for cid, r in sub.items()} == {cid: worst(r) for cid, r in lib.items()}
-        summary = {cid: [(r.check, r.verdict, r.outcome) for r in results] for cid, results in lib.items()}
-        assert {cid: [(r.check, r.verdict, r.outcome) for r in results] for cid, results in sub.items()} == summary
+        lib, sub = (run_verdicts(s, CASES, edition) for s in (library, shim))
+        assert {cid: v for cid, (v, _) in sub.items()} == {cid: v for cid, (v, _) in lib.items()}
+        summary = {cid: [(r.check, r.verdict, r.outcome) for r in results] for cid, (_, results) in lib.items()}
+        assert {cid: [(r.check, r.verdict, r.outcome) for r in results] for cid, (_, results) in sub.items()} == summary
 
 
 def test_the_imcpy_shim_gives_the_imcpy_adapters_verdicts():
@@ -292,7 +278,7 @@ def test_the_imcpy_shim_gives_the_imcpy_adapters_verdicts():
 
 def test_the_pyimclsts_shim_gives_the_pyimclsts_adapters_verdicts(tmp_path):
     pyimclsts_adapter = pytest.importorskip("imc_conformance.adapters.pyimclsts_adapter")
-    from imc_conformance.imc_xml import fetch_imc_xml
+    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
     library = LibrarySession(pyimclsts_adapter.adapter(), "pyimclsts")
     argv = [sys.executable, str(ROOT / "adapters" / "pyimclsts_shim.py"),
             "--imc-xml", str(fetch_imc_xml()), "--cache", str(tmp_path)]

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import re
 
-from ..evaluate import Verdict
-from ..results import FAILING, INTERRUPTED, CaseResult, RunResult
+from ..core.results import INTERRUPTED, CaseResult, RunResult
+from ..core.verdicts import FAILING, Verdict
 
 VERDICTS = tuple(Verdict)
 # The cases a report details: every failing verdict, and NON_STRICT even when it does not fail the run.

@@ -11,8 +11,9 @@ from pathlib import Path
 
 from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
-from ..evaluate import ByteDiff, Verdict
-from ..results import FORMAT, CaseResult, RunResult
+from ..core.results import ByteDiff
+from ..core.verdicts import Verdict
+from ..core.results import FORMAT, CaseResult, RunResult
 from .common import attention, clean, incident_lines, overall, verdict_columns
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from ..results import RunResult
+from ..core.results import RunResult
 
 
 def render_json(result: RunResult) -> str:

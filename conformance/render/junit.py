@@ -10,8 +10,8 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from collections import Counter
 
-from ..evaluate import Verdict
-from ..results import CaseResult, RunResult
+from ..core.verdicts import Verdict, failing
+from ..core.results import CaseResult, RunResult
 from .common import clean, incident_lines
 
 ERRORS = {Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR}
@@ -21,10 +21,10 @@ MESSAGE_LIMIT = 500  # characters of detail in a failure's message attribute
 def outcome(case: CaseResult, strict: bool) -> str | None:
     """``failure``, ``error``, ``skipped``, ``note`` (passed, with system-out) or None (plain pass)."""
     v = case.verdict
-    if v in (Verdict.FAIL, Verdict.WAIVER_STALE) or (v is Verdict.NON_STRICT and strict):
-        return "failure"
     if v in ERRORS:
         return "error"
+    if failing(v, strict):
+        return "failure"
     if v is Verdict.UNSUPPORTED:
         return "skipped"
     return None if v is Verdict.PASS and not case.notes else "note"
@@ -78,7 +78,7 @@ def render_junit(result: RunResult) -> str:
         suite.extend(el for el, _ in cases)
         suites.append((suite, counts))
     totals = {k: str(sum(counts[k] for _, counts in suites)) for k in ("tests", "failures", "errors", "skipped")}
-    root = ET.Element("testsuites", name=clean(f"imc-conformance {result.edition}: {result.implementation}"), **totals,
+    root = ET.Element("testsuites", name=clean(f"imc-conformance {result.suite} {result.edition}: {result.implementation}"), **totals,
                       time=f"{result.duration:.3f}")
     root.extend(suite for suite, _ in suites)
     if result.stderr:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import re
 
-from ..evaluate import Verdict
-from ..results import RunResult
+from ..core.verdicts import Verdict
+from ..core.results import RunResult
 from .common import attention, clean, incident_lines, overall, verdict_columns
 
 EMOJI = {
@@ -34,7 +34,8 @@ def render_markdown(result: RunResult) -> str:
     columns = verdict_columns(result)
     total = len(result.cases)
     lines = [
-        f"## {OVERALL[verdict]} IMC conformance: {verdict} — {cell(result.implementation)} · {cell(result.edition)}",
+        f"## {OVERALL[verdict]} {cell(result.title)} conformance: {verdict} — {cell(result.implementation)} · "
+        f"{cell(result.edition)}",
         "",
         f"**{total} cases** in {len(result.messages)} messages: "
         + ", ".join(f"{EMOJI[Verdict(v)]} {n} {v}" for v, n in result.summary.items())
@@ -46,7 +47,7 @@ def render_markdown(result: RunResult) -> str:
     ]
     for m in result.messages:
         counts = m.counts
-        lines.append(f"| {cell(m.name)} ({m.id}) | {OVERALL.get(m.verdict, '')} {m.verdict} | "
+        lines.append(f"| {cell(m.name)} ({cell(m.key)}) | {OVERALL.get(m.verdict, '')} {m.verdict} | "
                      + " | ".join(str(counts[v] or "") for v in columns) + " |")
     if not result.complete:
         lines += ["", "**Incomplete run**: it was interrupted; only the cases done so far are counted."]

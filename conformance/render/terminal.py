@@ -10,8 +10,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from ..evaluate import Verdict
-from ..results import RunResult, failing
+from ..core.results import RunResult
+from ..core.verdicts import Verdict, failing
 from .common import incident_lines, printable
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
@@ -24,10 +24,10 @@ def safe(text: str | None) -> str:
 
 
 def print_result(result: RunResult, console: Console) -> None:
-    title = f"{result.implementation} — IMC corpus, edition {result.edition}"
+    title = f"{result.implementation} — {result.title} corpus, edition {result.edition}"
     table = Table(title=safe(title + ("" if result.complete else " (INCOMPLETE: interrupted)")))
     table.add_column("message")
-    table.add_column("id", justify="right")
+    table.add_column("key", justify="right")
     table.add_column("verdict")
     for v in COLUMNS:
         table.add_column(v.value, justify="right")
@@ -38,7 +38,7 @@ def print_result(result: RunResult, console: Console) -> None:
         other = sum(n for v, n in counts.items() if v not in COLUMNS)
         errata = sorted({e for c in m.cases for e in c.errata})
         colour = "green" if m.verdict == "PASS" else "red"
-        table.add_row(safe(m.name), str(m.id), f"[{colour}]{m.verdict}[/]", *(str(counts[v]) for v in COLUMNS),
+        table.add_row(safe(m.name), safe(m.key), f"[{colour}]{m.verdict}[/]", *(str(counts[v]) for v in COLUMNS),
                       str(other), safe(", ".join(errata)))
     console.print(table)
     shown = [c for c in result.cases if failing(c.verdict, result.strict)]

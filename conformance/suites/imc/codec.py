@@ -8,8 +8,8 @@
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass
 
+from ...kinds.vector import Span
 from .crc16 import crc16
 from .definitions import SCALAR_FORMATS, Definitions, FieldDef, MessageDef
 from .values import float_from_bits, float_to_bits, raw_bytes, text_bytes, text_value
@@ -36,21 +36,6 @@ class EncodeError(ValueError):
     def __init__(self, rule: str, detail: str):
         super().__init__(f"{rule}: {detail}")
         self.rule, self.detail = rule, detail
-
-
-@dataclass(frozen=True)
-class Span:
-    """Bytes ``[start, end)`` of a frame hold ``path`` (e.g. ``LblRange.range``), of wire type ``type``.
-
-    ``role`` tells a value from the prefixes the wire adds: ``length`` (plaintext/rawdata), ``count``
-    (message-list), ``id`` (inline message or list element id), or ``header`` / ``footer``.
-    """
-
-    start: int
-    end: int
-    path: str
-    type: str
-    role: str = "value"
 
 
 def byte_order_of(frame: bytes) -> str | None:

@@ -4,10 +4,13 @@ The runner starts the program (an argv list, never a shell) and writes one JSON 
 its stdin; the program answers each with one line on its stdout, matched by ``id``, in any order:
 
 * ``{"id": 1, "op": "hello"}`` -> ``{"id": 1, "ok": true, "implementation": "...", "suites": ["imc"],
-  "byte_orders": ["le", "be"]}`` (``byte_orders``: the orders the implementation emits);
+  "byte_orders": ["le", "be"]}`` (the encodings the implementation emits, under the suite's name for them);
 * ``{"id": 2, "op": "encode", "suite": "imc", "message": {...}, "byte_order": "le"}`` ->
   ``{"id": 2, "ok": true, "frame": "<hex>"}``;
-* ``{"id": 3, "op": "decode", "suite": "imc", "frame": "<hex>"}`` -> ``{"id": 3, "ok": true, "message": {...}}``.
+* ``{"id": 3, "op": "decode", "suite": "imc", "frame": "<hex>"}`` (plus the suite's parameters, e.g. a ROS
+  ``type``) -> ``{"id": 3, "ok": true, "message": {...}}``;
+* ``{"id": 4, "op": "describe", "suite": "ros_acomms", "type": "..."}`` -> ``{"id": 4, "ok": true, ...}``
+  (the type's description, for suites that check definitions).
 
 A refusal is ``{"id": N, "ok": false, "error": "invalid CRC", "rule": "crc"}`` (``rule`` optional).
 ``"unsupported": true`` declares the capability absent. ``"ok": false, "internal": true`` says the
@@ -35,6 +38,7 @@ from __future__ import annotations
 import json
 import os
 import queue
+import resource
 import signal
 import subprocess
 import threading
@@ -44,9 +48,8 @@ from dataclasses import dataclass
 from itertools import count
 from typing import Iterable, Iterator
 
-from .evaluate import Answer
-from .results import Incident
-from .session import AdapterStartError, Job
+from ..core.results import Incident
+from ..core.session import AdapterStartError, Answer, Job
 
 STDERR_KEEP = 64 * 1024
 MAX_RESTARTS = 20
@@ -104,9 +107,14 @@ class _Process:
     ``("eof", b"")``, ``("exit", b"")`` (the program itself ended, whoever still holds its stdout).
     """
 
-    def __init__(self, argv: list[str], cwd, env, max_line: int, tail: _StderrTail):
+    def __init__(self, argv: list[str], cwd, env, max_line: int, tail: _StderrTail, memory_limit: int):
         self.popen = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                       cwd=cwd, env=env, shell=False, start_new_session=True)
+        if memory_limit:  # set from outside: preexec_fn is unsafe while this process runs threads
+            try:
+                resource.prlimit(self.popen.pid, resource.RLIMIT_DATA, (memory_limit, memory_limit))
+            except (ProcessLookupError, OSError):  # already gone (it is about to be seen so), or not Linux
+                pass
         self.events: queue.SimpleQueue = queue.SimpleQueue()
         self._outbox: queue.SimpleQueue = queue.SimpleQueue()
         self._max_line = max_line
@@ -221,13 +229,14 @@ class _Call:
     note: str = ""  # why it was replayed, when no request was to blame (passed on to its answer)
 
 
-def _first_call(job: Job) -> _Call:
+def _first_call(job: Job, encoding_param: str) -> _Call:
     """The first protocol request of a job."""
-    request, case = job.request, job.case
+    request = job.request
     if request.op == "encode":
-        return _Call(job, {"op": "encode", "suite": job.suite, "message": case["message"],
-                           "byte_order": request.byte_order})
-    body = {"op": "decode", "suite": job.suite, "frame": case["frames"][request.byte_order]}
+        return _Call(job, {"op": "encode", "suite": job.suite, "message": request.message, encoding_param: request.encoding})
+    if request.op == "describe":
+        return _Call(job, {"op": "describe", "suite": job.suite, **request.params})
+    body = {"op": "decode", "suite": job.suite, "frame": request.frame, **request.params}
     return _Call(job, body, then_encode=request.op == "roundtrip")
 
 
@@ -249,6 +258,8 @@ def _answer(op: str, reply: dict) -> Answer:
     if op == "decode":
         message = reply.get("message")
         return Answer("ok", message=message) if isinstance(message, dict) else _malformed("no 'message' object", reply)
+    if op == "describe":
+        return Answer("ok", message={k: v for k, v in reply.items() if k not in ("id", "ok")})
     try:
         return Answer("ok", frame=bytes.fromhex(reply["frame"]))
     except (KeyError, TypeError, ValueError):
@@ -274,9 +285,11 @@ class _Restart(Exception):
 class SubprocessSession:
     """A session over a program speaking the JSON-lines protocol (see the module docstring)."""
 
-    def __init__(self, argv: list[str], *, name: str, timeout: float = 5.0, cwd=None, env=None,
-                 max_line: int = 1_000_000, pipeline: int = 256, hello_timeout: float | None = None):
-        self.argv, self.name, self.timeout = list(argv), name, timeout
+    def __init__(self, argv: list[str], *, name: str, encoding_param: str, timeout: float = 5.0, cwd=None, env=None,
+                 max_line: int = 1_000_000, pipeline: int = 256, hello_timeout: float | None = None,
+                 memory_limit: int = 2 << 30):
+        self.argv, self.name, self.timeout, self.encoding_param = list(argv), name, timeout, encoding_param
+        self.memory_limit = memory_limit  # bytes of data memory the program may use (RLIMIT_DATA); 0: no limit
         self.hello_timeout = timeout if hello_timeout is None else hello_timeout  # start-up may take longer
         self.cwd, self.env, self.max_line, self.pipeline = cwd, env, max_line, max(1, pipeline)
         self._tail = _StderrTail()
@@ -304,7 +317,7 @@ class SubprocessSession:
 
     def _start(self) -> None:
         try:
-            proc = _Process(self.argv, self.cwd, self.env, self.max_line, self._tail)
+            proc = _Process(self.argv, self.cwd, self.env, self.max_line, self._tail, self.memory_limit)
         except OSError as exc:
             raise AdapterStartError(f"cannot start adapter {self.argv}: {exc.strerror or exc}") from exc
         try:
@@ -353,7 +366,7 @@ class SubprocessSession:
 
     def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
         """Perform every job, pipelined, yielding ``(job, Answer)`` as answers arrive."""
-        state = _RunState(iter(jobs))
+        state = _RunState(iter(jobs), self.encoding_param)
         try:
             while state.has_work():
                 yield from state.drain()
@@ -440,7 +453,7 @@ class SubprocessSession:
             yield from state.finish(restart.blame, restart.answer)
         else:
             calls = list(state.inflight.values())
-            ids = list(dict.fromkeys(c.job.case["id"] for c in calls))
+            ids = list(dict.fromkeys(c.job.case_id for c in calls))
             self.incidents.append(Incident(restart.incident_kind, restart.why, ids))
             for call in calls:
                 call.note = (f"answered alone after the adapter was restarted: {restart.why} "
@@ -471,8 +484,8 @@ class _RunState:
     then only the encode half is sent. Without such a decode, a roundtrip makes both calls itself.
     """
 
-    def __init__(self, jobs: Iterator[Job]):
-        self.jobs = jobs
+    def __init__(self, jobs: Iterator[Job], encoding_param: str):
+        self.jobs, self.encoding_param = jobs, encoding_param
         self.ready: deque[_Call] = deque()  # second halves of roundtrips, sent before new jobs
         self.replay: deque[_Call] = deque()  # sent one at a time after a restart
         self.inflight: dict[int, _Call] = {}
@@ -483,6 +496,7 @@ class _RunState:
         self.last_answer = 0.0
         self.restarts = 0  # in a row, without an answer
         self._exhausted = False
+        self._case: str | None = None  # the case of the last job pulled
 
     def needs_program(self) -> bool:
         return bool(self.inflight or self.replay or self.ready)
@@ -506,20 +520,24 @@ class _RunState:
             if job is None:
                 self._exhausted = True
                 return
-            key = (job.case["id"], job.request.byte_order)
+            if job.case_id != self._case:  # a case's roundtrips follow its decodes: older answers are not needed
+                self.decoded.clear()
+                self._case = job.case_id
+            key = (job.case_id, job.request.encoding)
             if job.request.op == "roundtrip" and key in self.decoded:
                 self._after_decode(job, self.decoded.pop(key))
             elif job.request.op == "roundtrip" and key in self.decoding:
                 self.parked.setdefault(key, []).append(job)
             else:
-                if job.request.op == "decode" and "roundtrip" in job.case["checks"]:
+                if job.request.op == "decode":
                     self.decoding.add(key)
-                self.ready.append(_first_call(job))
+                self.ready.append(_first_call(job, self.encoding_param))
 
     def _after_decode(self, job: Job, decoded: Answer) -> None:
         """Continue a roundtrip with the implementation's decoding: encode it, or fail as the decode did."""
         if decoded.kind == "ok":
-            body = {"op": "encode", "suite": job.suite, "message": decoded.message, "byte_order": job.request.byte_order}
+            body = {"op": "encode", "suite": job.suite, "message": decoded.message,
+                    self.encoding_param: job.request.encoding}
             self.ready.appendleft(_Call(job, body, note=decoded.note))
         else:
             self.finished.append((job, decoded))
@@ -533,7 +551,7 @@ class _RunState:
             self._after_decode(call.job, answer)
             return
         job = call.job
-        key = (job.case["id"], job.request.byte_order)
+        key = (job.case_id, job.request.encoding)
         if job.request.op == "decode" and key in self.decoding:
             self.decoding.discard(key)
             waiting = self.parked.pop(key, None)

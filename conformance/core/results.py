@@ -1,36 +1,44 @@
-"""The one result model every report renders: a run, its messages, their cases and checks.
+"""The one result model every report renders: a run, its groups (messages, types), their cases and checks.
 
 ``RunResult.to_dict()`` is the versioned JSON document (schema: ``vectors/schema/result.schema.json``);
 ``RunResult.from_dict()`` reads it back, in this format or an older one, so ``imc-conformance report`` can
-re-render a saved run.
+re-render a saved run exactly.
 """
 
 from __future__ import annotations
 
-import json
 import re
 from collections import Counter
 from dataclasses import asdict, dataclass, field
-from functools import cache
 
-from jsonschema import Draft202012Validator
-from jsonschema.exceptions import best_match
-
-from .evaluate import ByteDiff, CheckResult, Verdict
-from .paths import VECTORS
+from .verdicts import Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
 VERSION = 2
 FORMAT = f"{FORMAT_NAME}/{VERSION}"
 SCHEMAS = {1: "result-1.schema.json", 2: "result.schema.json"}
 INTERRUPTED = 130  # the exit code of a run stopped by Ctrl-C, as shells report SIGINT
-# A message fails if any case has one of these; NON_STRICT joins them under --strict.
-FAILING = (Verdict.FAIL, Verdict.CRASH, Verdict.TIMEOUT, Verdict.WAIVER_STALE, Verdict.ADAPTER_ERROR)
 
 
-def failing(verdict: Verdict, strict: bool) -> bool:
-    """The one definition of a failing verdict: FAILING, and NON_STRICT under --strict."""
-    return verdict in FAILING or (strict and verdict is Verdict.NON_STRICT)
+@dataclass(frozen=True)
+class ByteDiff:
+    """Bytes ``[start, end)`` differ between the expected and actual frame; ``field`` owns them in the expected one."""
+
+    start: int
+    end: int
+    field: str
+
+
+@dataclass(slots=True)
+class CheckResult:
+    check: str
+    verdict: Verdict
+    detail: str
+    outcome: str | None = None  # for acceptable cases: which permitted outcome the implementation chose
+    expected: str | None = None  # hex frames, kept for failures so reports can show them side by side
+    actual: str | None = None
+    diffs: tuple[ByteDiff, ...] = ()
+    note: str | None = None  # a remark on how the answer was obtained (Answer.note)
 
 
 @dataclass
@@ -51,7 +59,7 @@ class CaseResult:
     id: str
     message: str
     verdict: Verdict
-    expect: str
+    expect: str | None
     clause: str
     checks: list[CheckResult]
     rule: str | None = None
@@ -73,8 +81,10 @@ class CaseResult:
 
 @dataclass
 class MessageResult:
+    """The cases of one group (a message or type of the suite); ``key`` is the suite's identifier for it."""
+
     name: str
-    id: int
+    key: str
     verdict: str  # PASS | FAIL
     cases: list[CaseResult]
 
@@ -86,12 +96,13 @@ class MessageResult:
 @dataclass
 class RunResult:
     suite: str
+    title: str  # how reports name the suite
     edition: str
     implementation: str
     adapter: str
     strict: bool
     started: str
-    duration: float
+    duration: float  # seconds, rounded to milliseconds (so a saved result renders exactly as the live one)
     messages: list[MessageResult]
     stderr: str = ""
     notes: list[str] = field(default_factory=list)
@@ -109,8 +120,8 @@ class RunResult:
         return {v.value: counts[v.value] for v in Verdict if counts[v.value]}
 
     def exit_code(self) -> int:
-        """130 if interrupted; else 2 for an adapter error or protocol violation; else 1 for a failing verdict
-        (or, under --strict, a check kind left untested); else 0."""
+        """130 if interrupted; else 2 for an adapter error or protocol violation; else 1 for a failing verdict,
+        a crash incident or (under --strict) a check kind left untested; else 0."""
         if not self.complete:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
@@ -122,27 +133,23 @@ class RunResult:
 
     def to_dict(self) -> dict:
         return {
-            "format": FORMAT, "suite": self.suite, "edition": self.edition, "implementation": self.implementation,
-            "adapter": self.adapter, "strict": self.strict, "started": self.started, "duration": round(self.duration, 3),
-            "complete": self.complete, "summary": self.summary, "exit_code": self.exit_code(), "notes": self.notes,
-            "untested": self.untested, "incidents": [asdict(i) for i in self.incidents], "stderr": self.stderr,
-            "messages": [{"name": m.name, "id": m.id, "verdict": m.verdict,
+            "format": FORMAT, "suite": self.suite, "title": self.title, "edition": self.edition,
+            "implementation": self.implementation, "adapter": self.adapter, "strict": self.strict,
+            "started": self.started, "duration": self.duration, "complete": self.complete, "summary": self.summary,
+            "exit_code": self.exit_code(), "notes": self.notes, "untested": self.untested,
+            "incidents": [asdict(i) for i in self.incidents], "stderr": self.stderr,
+            "messages": [{"name": m.name, "key": m.key, "verdict": m.verdict,
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
                           "cases": [case_dict(c) for c in m.cases]} for m in self.messages],
         }
 
     @classmethod
-    def from_dict(cls, doc) -> RunResult:
-        """A result read back from its JSON document (any format version this code knows); raises ValueError
-        naming the JSON path of the first problem."""
-        version = format_version(doc)
-        error = best_match(result_validator(version).iter_errors(doc))
-        if error is not None:
-            raise ValueError(f"{error.json_path}: {error.message[:240]}")
-        messages = [MessageResult(m["name"], m["id"], m["verdict"], [case_from(c, m["name"]) for c in m["cases"]])
+    def from_dict(cls, doc: dict) -> RunResult:
+        """A result read back from its JSON document, valid against the schema of this format version."""
+        messages = [MessageResult(m["name"], m["key"], m["verdict"], [case_from(c, m["name"]) for c in m["cases"]])
                     for m in doc["messages"]]
-        return cls(doc["suite"], doc["edition"], doc["implementation"], doc["adapter"], doc["strict"], doc["started"],
-                   doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
+        return cls(doc["suite"], doc["title"], doc["edition"], doc["implementation"], doc["adapter"], doc["strict"],
+                   doc["started"], doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
                    [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []))
 
 
@@ -162,12 +169,6 @@ def format_version(doc) -> int:
     if version not in SCHEMAS:
         raise ValueError(f"unknown result format {fmt}")
     return version
-
-
-@cache
-def result_validator(version: int) -> Draft202012Validator:
-    schema = json.loads((VECTORS / "schema" / SCHEMAS[version]).read_text(encoding="utf-8"))
-    return Draft202012Validator(schema)
 
 
 def message_verdict(cases: list[CaseResult], strict: bool) -> str:

@@ -13,7 +13,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from .cache import cache_dir
+from ...cache import cache_dir
 
 IMCPY_VERSION = "1.1.2"
 _MEMBER = f"imcpy-{IMCPY_VERSION}/imc/IMC.xml"

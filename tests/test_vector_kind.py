@@ -1,19 +1,24 @@
-"""The judge: nothing an implementation answers can crash it, and misbehaving adapters are blamed as such."""
+"""The byte-vector kind's judge: nothing an implementation answers can crash it, and misbehaving adapters are
+blamed as such."""
 
 from __future__ import annotations
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from imc_conformance.corpus_data import load_cases
-from imc_conformance.definitions import load_definitions
-from imc_conformance.evaluate import Answer, Judge, Request, Verdict, plan
+from imc_conformance.core.session import Answer, Request
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.files import open_corpus
 
-DEFS = load_definitions()
-JUDGE = Judge(DEFS)
-CASES = load_cases()
+SUITE, _CASES = open_corpus("imc")
+KIND = SUITE.kinds["vector"]
+CASES = [c.data for c in _CASES]
 EDITION = "imc-5.4.30"
 SAMPLE = [c for c in CASES if c["id"].startswith(("imc/LblConfig/", "imc/AcousticOperation/", "imc/Announce/"))]
+
+
+def judge(case, request, answer):
+    return KIND.judge(case, EDITION, request, answer)
 
 json_values = st.recursive(
     st.none() | st.booleans() | st.integers() | st.floats(allow_nan=True) | st.text(max_size=8),
@@ -25,7 +30,7 @@ json_values = st.recursive(
 @settings(max_examples=300, deadline=None)
 @given(st.sampled_from(SAMPLE), st.data())
 def test_any_answer_gets_a_verdict(case, data):
-    requests = plan(case, EDITION, {"le", "be"})
+    requests = KIND.plan(case, EDITION, {"le", "be"})
     request = data.draw(st.sampled_from(requests))
     message = data.draw(json_values | st.fixed_dictionaries({"abbrev": st.just(case["id"].split("/")[1]),
                                                              "header": json_values, "fields": json_values}))
@@ -34,43 +39,43 @@ def test_any_answer_gets_a_verdict(case, data):
     rule = data.draw(st.none() | st.text(max_size=10))
     answer = Answer(kind, frame=frame if request.op != "decode" else None,
                     message=message if request.op == "decode" else None, reason="<b>x</b>", rule=rule)
-    result = JUDGE.judge(case, EDITION, request, answer)
+    result = judge(case, request, answer)
     assert isinstance(result.verdict, Verdict) and isinstance(result.detail, str)
 
 
 def test_an_unknown_message_name_is_an_adapter_error():
     case = next(c for c in CASES if c["id"] == "imc/AcousticOperation/realistic/crosscheck")
     answer = dict(case["message"], fields=dict(case["message"]["fields"], msg={"abbrev": "NoSuchMessage", "fields": {}}))
-    result = JUDGE.judge(case, EDITION, Request("decode-le", "decode", "le"), Answer("ok", message=answer))
+    result = judge(case, Request("decode-le", "decode", "le"), Answer("ok", message=answer))
     assert result.verdict is Verdict.ADAPTER_ERROR and "'NoSuchMessage'" in result.detail
 
 
 def test_an_unhashable_message_name_is_an_adapter_error_too():
     case = next(c for c in CASES if c["id"] == "imc/AcousticOperation/realistic/crosscheck")
     answer = dict(case["message"], fields=dict(case["message"]["fields"], msg={"abbrev": ["x"], "fields": {}}))
-    result = JUDGE.judge(case, EDITION, Request("decode-le", "decode", "le"), Answer("ok", message=answer))
+    result = judge(case, Request("decode-le", "decode", "le"), Answer("ok", message=answer))
     assert result.verdict is Verdict.ADAPTER_ERROR and "['x']" in result.detail
 
 
 def test_an_accepted_invalid_frame_fails_whatever_the_answer_says():
     case = next(c for c in CASES if c["id"] == "imc/LblRange/unknown-id/999/le")
     answer = Answer("ok", message={"abbrev": "Unknown", "header": {}, "fields": {}})  # what pyimclsts answers
-    assert JUDGE.judge(case, EDITION, Request("decode-le", "decode", "le"), answer).verdict is Verdict.FAIL
+    assert judge(case, Request("decode-le", "decode", "le"), answer).verdict is Verdict.FAIL
 
 
 def test_a_wrong_rule_is_non_strict_and_no_rule_passes():
     case = next(c for c in CASES if c["id"] == "imc/LblRange/crc/footer-first-byte/le")
     request = Request("decode-le", "decode", "le")
-    assert JUDGE.judge(case, EDITION, request, Answer("rejected", rule="sync")).verdict is Verdict.NON_STRICT
-    assert JUDGE.judge(case, EDITION, request, Answer("rejected", rule="crc")).verdict is Verdict.PASS
-    assert JUDGE.judge(case, EDITION, request, Answer("rejected")).verdict is Verdict.PASS
+    assert judge(case, request, Answer("rejected", rule="sync")).verdict is Verdict.NON_STRICT
+    assert judge(case, request, Answer("rejected", rule="crc")).verdict is Verdict.PASS
+    assert judge(case, request, Answer("rejected")).verdict is Verdict.PASS
 
 
 def test_encode_failures_name_the_differing_field():
     case = next(c for c in CASES if c["id"] == "imc/LblRange/realistic/crosscheck")
     frame = bytearray.fromhex(case["frames"]["le"])
     frame[23] ^= 0xFF
-    result = JUDGE.judge(case, EDITION, Request("encode-le", "encode", "le"), Answer("ok", frame=bytes(frame)))
+    result = judge(case, Request("encode-le", "encode", "le"), Answer("ok", frame=bytes(frame)))
     assert result.verdict is Verdict.FAIL
     assert [(d.start, d.end, d.field) for d in result.diffs][0] == (23, 24, "LblRange.range")
     assert "first difference at byte 23 = LblRange.range (bytes 21-24)" in result.detail

@@ -1,6 +1,6 @@
 """Rebuild the IMC corpus: one vector file per message, the coverage table, deterministically.
 
-``imc-conformance generate`` (or ``python -m imc_conformance.corpus.build``) writes
+``imc-conformance generate`` (or ``python -m imc_conformance.suites.imc.corpus.build``) writes
 ``vectors/imc/cases/*.json`` and ``vectors/imc/coverage.md``; ``--check`` only reports drift.
 """
 

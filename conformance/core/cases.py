@@ -1,0 +1,39 @@
+"""Cases as the runner sees them, and selecting them: by edition, group, id glob and tag."""
+
+from __future__ import annotations
+
+import fnmatch
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Case:
+    """A case of a suite: ``data`` is its record as the corpus holds it; ``group`` the message or type it
+    is filed under (declared by its file); ``kind`` the case kind that plans and judges it."""
+
+    id: str
+    group: str
+    kind: str
+    data: dict
+
+
+def expectation(data: dict, edition: str) -> str | None:
+    """``valid`` / ``invalid`` / ``acceptable`` under ``edition``; None if the case is not part of it."""
+    expect = data["expect"]
+    return expect if isinstance(expect, str) else expect.get(edition)
+
+
+def select_cases(cases: list[Case], edition: str, groups=(), globs=(), tags=()) -> list[Case]:
+    """The cases of ``edition``, narrowed to these groups, id globs and tags (each when given)."""
+    out = []
+    for case in cases:
+        if expectation(case.data, edition) is None:
+            continue
+        if groups and case.group not in groups:
+            continue
+        if globs and not any(fnmatch.fnmatchcase(case.id, g) for g in globs):
+            continue
+        if tags and not set(tags) & set(case.data.get("tags", ())):
+            continue
+        out.append(case)
+    return out

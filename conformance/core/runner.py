@@ -1,0 +1,95 @@
+"""Run selected cases through a session and build the result model. The one execution path: the CLI, the
+pytest plugin, the benchmark and the tests all run cases here; the session does all the I/O."""
+
+from __future__ import annotations
+
+import datetime as dt
+import time
+from collections import Counter, defaultdict
+from typing import Callable
+
+from .cases import Case, expectation
+from .hello import check_hello
+from .results import CaseResult, CheckResult, MessageResult, RunResult, message_verdict
+from .session import Job, Session
+from .suite import Suite
+from .verdicts import Verdict, failing, worst
+from .waivers import Waiver
+
+
+def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str, adapter: str,
+              errata: str | None = None, waivers: dict[str, Waiver] | None = None, strict: bool = False,
+              notes: list[str] | None = None, progress: Callable[[int], None] | None = None) -> RunResult:
+    """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far).
+
+    Ctrl-C (KeyboardInterrupt) while cases run ends the run early: the result then holds the cases whose
+    every check was answered and is marked incomplete. ``errata`` names the implementation errata that
+    annotate failures (default: the key the adapter's hello declares, if any).
+    """
+    started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+    clock = time.perf_counter()
+    hello = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
+    emits = set(hello["emits"])
+    errata = errata or hello["errata"]
+    groups = {g.name: g for g in suite.groups}
+    cases = [c for c in cases if expectation(c.data, edition) is not None]  # a case may exist in one edition only
+    strays = sorted({c.group for c in cases} - set(groups))
+    if strays:  # never judge a case and leave it out of the result
+        raise ValueError(f"cases filed under {', '.join(strays)}, which the suite {suite.name!r} does not have")
+    plans = {c.id: suite.kinds[c.kind].plan(c.data, edition, emits) for c in cases}
+    by_id = {c.id: c for c in cases}
+    jobs = [Job(f"{c.id}#{r.check}", suite.name, c.id, r) for c in cases for r in plans[c.id]]
+    results: dict[str, list[CheckResult]] = defaultdict(list)
+    complete = True
+    try:
+        for done, (job, answer) in enumerate(session.run(jobs), 1):
+            case = by_id[job.case_id]
+            results[case.id].append(suite.kinds[case.kind].judge(case.data, edition, job.request, answer))
+            if progress:
+                progress(done)
+    except KeyboardInterrupt:
+        complete = False
+    notes = list(notes or [])
+    if not complete:
+        cases = [c for c in cases if plans[c.id] and len(results[c.id]) == len(plans[c.id])]
+        notes.insert(0, f"interrupted: {len(cases)} of {len(plans)} cases were done; the others are not in this result")
+    untested, why = hello_gaps(suite, cases, edition, emits)
+    notes += why
+    waivers = waivers or {}
+    filed: dict[str, list[CaseResult]] = defaultdict(list)
+    for case in cases:
+        checks = sorted(results.get(case.id, ()), key=lambda r: r.check)
+        verdict = worst(r.verdict for r in checks)
+        waiver = waivers.get(case.id)
+        if waiver is not None:
+            verdict = Verdict.WAIVED if failing(verdict, strict=True) else Verdict.WAIVER_STALE
+        explained = suite.implementation_errata(case.id, errata) if failing(verdict, strict=False) else []
+        filed[case.group].append(CaseResult(case.id, case.group, verdict, expectation(case.data, edition),
+                                            case.data["clause"], checks, case.data.get("rule"), explained,
+                                            waiver.reason if waiver else None))
+    messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
+                for g in suite.groups if g.name in filed]
+    return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
+                     round(time.perf_counter() - clock, 3), messages, session.stderr, notes, complete,
+                     list(session.incidents), untested)
+
+
+def hello_gaps(suite: Suite, cases: list[Case], edition: str, emits: set[str]) -> tuple[list[str], list[str]]:
+    """The check kinds the hello rules out for every case (untested), and notes on what it narrows."""
+    every = set(suite.encodings)
+    wanted = Counter(r.check for c in cases for r in suite.kinds[c.kind].plan(c.data, edition, every))
+    planned = {r.check for c in cases for r in suite.kinds[c.kind].plan(c.data, edition, emits)}
+    missing = sorted(check for check in wanted if check not in planned)
+    if not missing:
+        return [], []
+    ops = sorted({check.split("-")[0] for check in missing})
+    untested = [op for op in ops if not any(check.split("-")[0] == op for check in planned)]
+    skipped = sum(wanted[check] for check in missing)
+    if untested:
+        note = (" and ".join(f"no {op} check ran" for op in untested) + f": the adapter's hello lists no "
+                f"{suite.encoding_param.replace('_', ' ')} the implementation emits ({skipped} checks skipped; under "
+                "--strict this fails the run)")
+    else:
+        note = (f"{', '.join(missing)} checks do not apply: the implementation emits only "
+                f"{', '.join(sorted(emits))} ({skipped} checks skipped)")
+    return untested, [note]

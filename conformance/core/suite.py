@@ -1,0 +1,109 @@
+"""What a suite brings to the core, and what a case kind must do. The core knows suites only through this.
+
+A suite (``imc_conformance.suites.<name>``) has its data folder (``vectors/<name>``: definitions, cases,
+rules, errata), its editions and encodings, the groups its cases are filed under (messages, types), its
+case kinds (each folder of case files belongs to one kind, which plans and judges its cases), its
+built-in adapters and its errata. Adding a suite adds a package; adding a kind adds a package and a
+folder of case files.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Protocol
+
+from .results import CheckResult
+from .session import Answer, Request
+
+
+class CaseKind(Protocol):
+    """Plans the requests a case needs and judges each answer; pure (no I/O)."""
+
+    name: str
+
+    def plan(self, case: dict, edition: str, emits: set[str]) -> list[Request]: ...
+
+    def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult: ...
+
+
+@dataclass(frozen=True)
+class Group:
+    """What cases are filed under and reports are organised by: ``name`` (the second segment of their ids) and
+    ``key``, the suite's own short identifier for it (a message number, a qualified type name)."""
+
+    name: str
+    key: str
+
+
+@dataclass(frozen=True)
+class BuiltinAdapter:
+    """An adapter a suite ships: a library object (``library``: ``module:attribute``) or a subprocess shim
+    (``argv()`` builds its command line, fetching what it needs)."""
+
+    name: str
+    library: str | None = None
+    argv: Callable[[], list[str]] | None = None
+    help: str = ""
+
+
+class Suite(ABC):
+    name: str  # the first segment of every case id
+    title: str  # how reports name the suite
+    editions: tuple[str, ...]  # the default first
+    encodings: tuple[str, ...]  # the wire encodings a case may have frames in (byte orders, serializations)
+    encoding_param: str  # how the adapter protocol names an encoding; hello lists the emitted ones as <param>s
+    group_label: str  # what a group is ("message", "type")
+    case_folders: dict[str, str]  # folder of case files under the data folder -> case kind name
+
+    def __init__(self, folder: Path):
+        self.folder = folder
+
+    @property
+    @abstractmethod
+    def groups(self) -> tuple[Group, ...]:
+        """Every group, in report order."""
+
+    @property
+    @abstractmethod
+    def kinds(self) -> dict[str, CaseKind]:
+        """The case kinds, by name."""
+
+    @property
+    @abstractmethod
+    def adapters(self) -> dict[str, BuiltinAdapter]:
+        """The built-in adapters, by name; the first is the default."""
+
+    @abstractmethod
+    def schema(self, kind: str) -> Path:
+        """The JSON Schema of this suite's files of case kind ``kind``."""
+
+    @abstractmethod
+    def group_of(self, doc: dict) -> str:
+        """The group a case file declares (every case in it is filed there)."""
+
+    @abstractmethod
+    def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
+        """(JSON path suffix, what is wrong) for a problem of a schema-valid case that only the definitions
+        can see (a value that does not fit its field), or None."""
+
+    @property
+    @abstractmethod
+    def errata(self) -> list[dict]:
+        """The suite's errata (``id``, and for an implementation's: ``implementation`` and case globs)."""
+
+    def implementation_errata(self, case_id: str, key: str | None) -> list[str]:
+        """Ids of the errata of implementation ``key`` whose case globs match ``case_id``."""
+        if key is None:
+            return []
+        return [e["id"] for e in self.errata
+                if e.get("implementation") == key and any(fnmatch.fnmatchcase(case_id, g) for g in e.get("cases", ()))]
+
+    @abstractmethod
+    def generate(self, check: bool) -> int:
+        """Rebuild the suite's generated files (or, with ``check``, only report drift: 1 if any); the exit code."""
+
+    def commands(self, subparsers) -> None:
+        """Add the suite's own subcommands to the command line (none by default)."""

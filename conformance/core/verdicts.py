@@ -1,0 +1,36 @@
+"""Verdicts, their severity, and the one definition of a failing verdict."""
+
+from __future__ import annotations
+
+from enum import Enum
+
+
+class Verdict(str, Enum):
+    PASS = "PASS"
+    FAIL = "FAIL"
+    NON_STRICT = "NON_STRICT"  # right outcome, wrong reason (e.g. the rejection named another rule)
+    IMPL_DEFINED = "IMPL_DEFINED"  # an acceptable case: recorded with what the implementation did
+    UNSUPPORTED = "UNSUPPORTED"
+    CRASH = "CRASH"
+    TIMEOUT = "TIMEOUT"
+    ADAPTER_ERROR = "ADAPTER_ERROR"
+    WAIVED = "WAIVED"  # a failure a waiver covers
+    WAIVER_STALE = "WAIVER_STALE"  # a waived case that now passes: the waiver must go
+
+
+# A group fails if any case has one of these; NON_STRICT joins them under --strict.
+FAILING = (Verdict.FAIL, Verdict.CRASH, Verdict.TIMEOUT, Verdict.WAIVER_STALE, Verdict.ADAPTER_ERROR)
+
+SEVERITY = {v: rank for rank, v in enumerate([
+    Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR, Verdict.FAIL, Verdict.NON_STRICT,
+    Verdict.IMPL_DEFINED, Verdict.UNSUPPORTED, Verdict.PASS])}
+
+
+def failing(verdict: Verdict, strict: bool) -> bool:
+    """The one definition of a failing verdict: FAILING, and NON_STRICT under --strict."""
+    return verdict in FAILING or (strict and verdict is Verdict.NON_STRICT)
+
+
+def worst(verdicts) -> Verdict:
+    """The most severe of ``verdicts`` (UNSUPPORTED if there are none): a case's verdict from its checks'."""
+    return min(verdicts, key=SEVERITY.__getitem__, default=Verdict.UNSUPPORTED)

@@ -1,0 +1,148 @@
+"""Reading the files a run depends on: a suite's case files, waivers, saved results.
+
+Every file is checked against its JSON Schema, and case files also against the suite's definitions, when
+it is read; a problem is reported with the file and the JSON path of the first one found
+(``200-LblRange.json: $.cases[0].message.fields.range: ...``). The schema check of a case file is
+remembered per file content in the cache folder, since over a whole corpus it takes seconds.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+from functools import cache
+from pathlib import Path
+
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import best_match
+
+from .cache import remembered
+from .core.cases import Case
+from .core.results import SCHEMAS, RunResult, format_version
+from .core.suite import Suite
+from .core.waivers import Waiver, WaiverError, waivers_in_force
+from .paths import VECTORS
+from .suites import load_suite
+
+
+class CorpusError(ValueError):
+    """A case file the runner cannot use; the message names the file and the JSON path."""
+
+
+@cache
+def validator(schema: Path) -> tuple[bytes, Draft202012Validator]:
+    raw = schema.read_bytes()
+    return raw, Draft202012Validator(json.loads(raw))
+
+
+def schema_error(schema: Path, doc, where: str, memo: bytes | None = None) -> str | None:
+    """``<where>: <JSON path>: <problem>`` for the first schema problem of ``doc``, or None. With ``memo`` (the
+    file's bytes), a document already found valid is not checked again."""
+    raw, check = validator(schema)
+    known, record = remembered(schema.name, raw, memo) if memo is not None else (False, lambda: None)
+    if known:
+        return None
+    error = best_match(check.iter_errors(doc))
+    if error is None:
+        record()
+        return None
+    return f"{where}: " * bool(where) + f"{error.json_path}: {shorten(error.message)}"
+
+
+def shorten(text: str, limit: int = 240) -> str:
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+def read_json(path: Path, error=ValueError):
+    try:
+        raw = path.read_bytes()
+        return raw, json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise error(f"{path}: not JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"{path}: cannot read: {exc.strerror if isinstance(exc, OSError) else exc}") from exc
+
+
+# ---------------------------------------------------------------- case files
+
+def open_corpus(suite_name: str, directory: Path | None = None) -> tuple[Suite, list[Case]]:
+    """The suite and its cases: the packaged corpus, or ``directory`` given as a suite folder (holding
+    ``cases/`` and maybe its own definitions and errata) or as a folder of case files."""
+    try:
+        if directory is None:
+            suite = load_suite(suite_name)
+            return suite, read_cases(suite, tuple(suite.case_folders.items()))
+        folder = Path(directory)
+        if not folder.is_dir():
+            raise CorpusError(f"{folder}: {'not a directory' if folder.exists() else 'no such directory'}")
+        suite = load_suite(suite_name)
+        if any((folder / sub).is_dir() for sub in suite.case_folders):
+            suite = load_suite(suite_name, folder)
+            return suite, read_cases(suite, tuple(suite.case_folders.items()))
+        suite = load_suite(suite_name, folder.parent)  # a bare folder of case files: its parent's data, if any
+        return suite, read_cases(suite, ((folder.name, next(iter(suite.case_folders.values()))),), bare=folder)
+    except LookupError as exc:
+        raise CorpusError(str(exc)) from exc
+
+
+@cache
+def read_cases(suite: Suite, folders: tuple[tuple[str, str], ...], bare: Path | None = None) -> list[Case]:
+    """Every case of the suite's case folders (sub-folder name, kind), each file checked; ids unique."""
+    cases, seen, found = [], set(), False
+    for sub, kind in folders:
+        folder = bare or suite.folder / sub
+        for path in sorted(folder.glob("*.json")):
+            found = True
+            for case in read_case_file(suite, kind, path):
+                if case.id in seen:
+                    raise CorpusError(f"{path}: the case id {case.id} appears twice in the corpus")
+                seen.add(case.id)
+                cases.append(case)
+    if not found:
+        raise CorpusError(f"{bare or suite.folder}: no case files (*.json)")
+    return cases
+
+
+def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
+    raw, doc = read_json(path, CorpusError)
+    problem = schema_error(suite.schema(kind), doc, str(path), memo=raw)
+    if problem:
+        raise CorpusError(problem)
+    group = suite.group_of(doc)
+    if group not in {g.name for g in suite.groups}:
+        raise CorpusError(f"{path}: the file is filed under {group!r}, which is not a {suite.group_label} "
+                          f"of the suite {suite.name!r}")
+    prefix = f"{suite.name}/{group}/"
+    out = []
+    for i, data in enumerate(doc["cases"]):
+        if not data["id"].startswith(prefix):
+            raise CorpusError(f"{path}: $.cases[{i}].id: {data['id']!r} is not under {prefix} (the file's "
+                              f"{suite.group_label})")
+        problem = suite.case_problem(kind, data)
+        if problem:
+            raise CorpusError(f"{path}: $.cases[{i}]{problem[0]}: {problem[1]}")
+        out.append(Case(data["id"], group, kind, data))
+    return out
+
+
+# ---------------------------------------------------------------- waivers and saved results
+
+def load_waivers(path: Path, known_ids: set[str], today: dt.date) -> tuple[dict[str, Waiver], list[str]]:
+    """The waivers in force by case id, and notes on the expired ones."""
+    _, doc = read_json(Path(path), WaiverError)
+    problem = schema_error(VECTORS / "schema" / "waivers.schema.json", doc, str(path))
+    if problem:
+        raise WaiverError(problem)
+    return waivers_in_force(doc, known_ids, today, str(path))
+
+
+def read_result(path: Path) -> RunResult:
+    """A saved result (any format version this code knows); ValueError naming the JSON path of a problem."""
+    _, doc = read_json(Path(path))
+    version = format_version(doc)
+    problem = schema_error(VECTORS / "schema" / SCHEMAS[version], doc, "")
+    if problem:
+        raise ValueError(problem)
+    if version == 1:  # format 1 knew only IMC: numeric message ids, no title, completeness, incidents or check kinds
+        doc = dict(doc, title="IMC", messages=[dict(m, key=str(m["id"])) for m in doc["messages"]])
+    return RunResult.from_dict(doc)

@@ -1,0 +1,239 @@
+"""Sans-IO planning and judging of byte vectors, generic over a suite's codec.
+
+A vector case holds frames (hex, by encoding) and/or a message in the suite's decoded form, and says
+what a conforming implementation does with them: ``valid`` (encode to exactly the frame, decode to
+exactly the message, re-encode its own decoding to the same bytes, describe the type as given),
+``invalid`` (refuse, naming ``rule`` if it can) or ``acceptable`` (one of ``outcomes``). ``plan`` lists
+the requests a case needs for an implementation that emits some encodings; ``judge`` turns each answer
+into a check verdict, keeping both frames and the differing bytes (named by field) of a failure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from ...core.cases import expectation
+from ...core.results import ByteDiff, CheckResult
+from ...core.session import Answer, Request
+from ...core.verdicts import Verdict
+
+FAILURE_KINDS = {"crash": Verdict.CRASH, "timeout": Verdict.TIMEOUT, "adapter-error": Verdict.ADAPTER_ERROR,
+                 "unsupported": Verdict.UNSUPPORTED}
+
+
+@dataclass(frozen=True)
+class Span:
+    """Bytes ``[start, end)`` of a frame hold ``path`` (e.g. ``LblRange.range``), of wire type ``type``.
+
+    ``role`` tells a value from what the wire adds: e.g. ``length``, ``count``, ``id``, ``header``, ``footer``.
+    """
+
+    start: int
+    end: int
+    path: str
+    type: str
+    role: str = "value"
+
+
+class VectorCodec(Protocol):
+    """What a suite gives the vector kind: its reference codec and decoded-form policy."""
+
+    encodings: tuple[str, ...]
+    rules: frozenset[str]  # the rule names a refusal may give
+
+    def encode(self, message: dict, encoding: str) -> bytes:
+        """The reference encoding; raises ValueError if the message cannot be encoded."""
+
+    def layout(self, frame: bytes, encoding: str, case: dict) -> list[Span]:
+        """The byte map of a frame of this case; raises ValueError if the frame cannot be laid out."""
+
+    def differences(self, expected: dict, actual, nan_payload: bool) -> list:
+        """How a decoded message differs from the expected one (each difference printable)."""
+
+    def malformed(self, message) -> str | None:
+        """Why an answered message is not a well-formed decoded form (the adapter's fault), or None."""
+
+    def params(self, case: dict, op: str, encoding: str | None) -> dict:
+        """The operation's further parameters as the adapter protocol names them."""
+
+    def describe_differences(self, expected: dict, actual) -> list[str]:
+        """How an answered description of a type differs from the expected one."""
+
+
+class VectorKind:
+    """Plans and judges the byte vectors of one suite."""
+
+    name = "vector"
+
+    def __init__(self, codec: VectorCodec):
+        self.codec = codec
+
+    # ------------------------------------------------------------ planning
+
+    def plan(self, case: dict, edition: str, emits: set[str]) -> list[Request]:
+        """The requests to make for ``case``; encoding in an encoding the implementation does not emit is not
+        applicable."""
+        if expectation(case, edition) is None:
+            return []
+        frames, out = case.get("frames", {}), []
+        for check in case["checks"]:
+            if check == "roundtrip":
+                out += [self._request(case, f"roundtrip-{e}", "roundtrip", e)
+                        for e in self.codec.encodings if e in emits and e in frames]
+            elif check == "describe":
+                out.append(Request("describe", "describe", params=self.codec.params(case, "describe", None)))
+            else:
+                op, encoding = check.split("-", 1)
+                if op != "encode" or encoding in emits:
+                    out.append(self._request(case, check, op, encoding))
+        return out
+
+    def _request(self, case: dict, check: str, op: str, encoding: str) -> Request:
+        if op == "encode":
+            return Request(check, op, encoding, message=case["message"], params=self.codec.params(case, op, encoding))
+        return Request(check, op, encoding, frame=case["frames"][encoding], params=self.codec.params(case, op, encoding))
+
+    # ------------------------------------------------------------ judging
+
+    def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult:
+        result = self._judge(case, edition, request, answer)
+        if answer.note:
+            result.note = answer.note
+        return result
+
+    def _judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult:
+        if answer.kind in FAILURE_KINDS:
+            return CheckResult(request.check, FAILURE_KINDS[answer.kind], answer.reason)
+        if answer.kind == "rejected" and answer.rule is not None and answer.rule not in self.codec.rules:
+            return CheckResult(request.check, Verdict.ADAPTER_ERROR, f"the refusal names the rule {answer.rule[:80]!r}, "
+                               f"which the suite's rules do not have: {answer.reason}")
+        if request.op == "describe":
+            return self._describe(case, request, answer)
+        expect = expectation(case, edition)
+        if expect == "valid":
+            return self._valid(case, request, answer)
+        if expect == "invalid":
+            return self._invalid(case, request, answer)
+        return self._acceptable(case, request, answer)
+
+    def _describe(self, case, request, answer) -> CheckResult:
+        if answer.kind == "rejected":
+            return CheckResult(request.check, Verdict.FAIL, f"refused to describe the type: {answer.reason}")
+        diffs = self.codec.describe_differences(case["describe"], answer.message)
+        if diffs and not isinstance(answer.message, dict):
+            return CheckResult(request.check, Verdict.ADAPTER_ERROR, "malformed answer: no description object")
+        if diffs:
+            return CheckResult(request.check, Verdict.FAIL, "; ".join(diffs[:3]))
+        return CheckResult(request.check, Verdict.PASS, "described as expected")
+
+    def _decoded_wrongly(self, case, request, answer, detail_prefix: str) -> CheckResult | None:
+        """None if the decoded message is the expected one; else an ADAPTER_ERROR (malformed answer) or FAIL."""
+        diffs = self.codec.differences(case["message"], answer.message,
+                                       nan_payload=case.get("compare", {}).get("nan_payload", False))
+        if not diffs:
+            return None
+        malformed = self.codec.malformed(answer.message)
+        if malformed:
+            return CheckResult(request.check, Verdict.ADAPTER_ERROR, malformed)
+        expected = bytes.fromhex(case["frames"][request.encoding])
+        return self.failure(case, request, detail_prefix + "; ".join(str(d) for d in diffs[:5]), expected,
+                            self.reencoded(answer.message, request.encoding))
+
+    def _valid(self, case, request, answer) -> CheckResult:
+        check = request.check
+        if answer.kind == "rejected":
+            return CheckResult(check, Verdict.FAIL, f"refused a valid {request.op}: {answer.reason}")
+        if request.op == "decode":
+            return self._decoded_wrongly(case, request, answer, "") or CheckResult(check, Verdict.PASS, "decoded as expected")
+        expected = bytes.fromhex(case["frames"][request.encoding])
+        if answer.frame != expected:
+            return self.failure(case, request, "", expected, answer.frame, locate=True)
+        return CheckResult(check, Verdict.PASS, "frame matches" if request.op == "encode" else "re-encoded to the same frame")
+
+    def _invalid(self, case, request, answer) -> CheckResult:
+        check, rule = request.check, case["rule"]
+        if answer.kind == "ok":
+            what = "accepted an invalid frame" if request.op == "decode" else "encoded a message it must refuse"
+            return CheckResult(check, Verdict.FAIL, f"{what} (rule {rule})")
+        if answer.rule is not None and answer.rule != rule:
+            return CheckResult(check, Verdict.NON_STRICT, f"rejected, but named rule {answer.rule!r} instead of {rule!r}: {answer.reason}")
+        return CheckResult(check, Verdict.PASS, f"rejected: {answer.reason}")
+
+    def _acceptable(self, case, request, answer) -> CheckResult:
+        check = request.check
+        permitted = {o["outcome"]: o for o in case["outcomes"]}
+        if answer.kind == "rejected":
+            if "reject" in permitted and answer.rule is not None:
+                return CheckResult(check, Verdict.NON_STRICT, f"rejected naming rule {answer.rule!r}, which this case "
+                                   f"does not break: {answer.reason}", "reject")
+            if "reject" in permitted:
+                return CheckResult(check, Verdict.IMPL_DEFINED, f"rejected: {answer.reason}", "reject")
+            return CheckResult(check, Verdict.FAIL, f"rejected, which this case does not permit: {answer.reason}")
+        if request.op == "decode":
+            wrong = self._decoded_wrongly(case, request, answer, "accepted, but decoded wrongly: ")
+            if wrong is None and "accept" in permitted:
+                return CheckResult(check, Verdict.IMPL_DEFINED, "accepted", "accept")
+            return wrong or CheckResult(check, Verdict.FAIL, "accepted, which this case does not permit")
+        frames = {name: o.get("frames", case.get("frames")) for name, o in permitted.items() if name != "reject"}
+        for name, candidate in frames.items():
+            if candidate and candidate.get(request.encoding) == (answer.frame or b"").hex():
+                return CheckResult(check, Verdict.IMPL_DEFINED, f"{name}: {answer.frame.hex()[:64]}", name)
+        reference = bytes.fromhex((frames.get("accept") or next(iter(frames.values()), {}))[request.encoding])
+        return self.failure(case, request, "encoded to a frame no outcome permits: ", reference, answer.frame, locate=True)
+
+    # ------------------------------------------------------------ evidence
+
+    def failure(self, case: dict, request: Request, detail: str, expected: bytes, actual: bytes | None,
+                locate: bool = False) -> CheckResult:
+        """A FAIL that keeps both frames and the differing byte ranges, named by field; ``locate`` adds where
+        the frames first differ to ``detail``. The expected frame is laid out once."""
+        spans = self._spans(expected, request.encoding, case) if actual is not None else []
+        if locate:
+            detail += frame_difference(expected, actual, spans)
+        return CheckResult(request.check, Verdict.FAIL, detail, expected=expected.hex(),
+                           actual=None if actual is None else actual.hex(), diffs=byte_diffs(expected, actual, spans))
+
+    def _spans(self, frame: bytes, encoding: str, case: dict) -> list[Span]:
+        try:
+            return self.codec.layout(frame, encoding, case)
+        except ValueError:  # an expected frame the codec cannot lay out (e.g. an out-of-type alternative)
+            return []
+
+    def reencoded(self, message, encoding: str) -> bytes | None:
+        """The reference encoding of an implementation's decoded message, to show what it understood."""
+        try:
+            return self.codec.encode(message, encoding)
+        except (ValueError, KeyError, TypeError, AttributeError):
+            return None
+
+
+def byte_diffs(expected: bytes, actual: bytes | None, spans: list[Span]) -> tuple[ByteDiff, ...]:
+    """Runs of differing bytes, split at the field boundaries (``spans``) of the expected frame."""
+    if actual is None:
+        return ()
+    owner = {i: s.path for s in spans for i in range(s.start, s.end)}
+    out: list[ByteDiff] = []
+    for i in range(max(len(expected), len(actual))):
+        differs = i >= len(expected) or i >= len(actual) or expected[i] != actual[i]
+        if not differs:
+            continue
+        name = owner.get(i, "beyond the expected frame" if i >= len(expected) else "unmapped")
+        if out and out[-1].end == i and out[-1].field == name:
+            out[-1] = ByteDiff(out[-1].start, i + 1, name)
+        else:
+            out.append(ByteDiff(i, i + 1, name))
+    return tuple(out)
+
+
+def frame_difference(expected: bytes, actual: bytes | None, spans: list[Span]) -> str:
+    """Where two frames first differ, named by the field (of ``spans``) that owns the byte in the expected frame."""
+    if actual is None:
+        return "no frame"
+    first = next((i for i, (a, b) in enumerate(zip(expected, actual)) if a != b), min(len(expected), len(actual)))
+    if first == len(expected) == len(actual):
+        return "identical"
+    owner = next((s for s in spans if s.start <= first < s.end), None)
+    where = f" = {owner.path} (bytes {owner.start}-{owner.end - 1})" if owner else ""
+    return (f"{len(actual)} bytes, expected {len(expected)}; first difference at byte {first}{where}: "
+            f"expected {expected[first:first + 8].hex(' ')}, got {actual[first:first + 8].hex(' ')}")

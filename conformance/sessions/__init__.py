@@ -1,0 +1,1 @@
+"""Sessions: how requests reach an implementation (in-process library, subprocess); they do all the I/O."""

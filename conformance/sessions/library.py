@@ -1,0 +1,89 @@
+"""Drive a library adapter (an in-process Python object) through the requests of a run.
+
+The adapter has ``hello()``, ``encode(suite, message, encoding)``, ``decode(suite, frame, **params)`` and,
+for suites that describe their types, ``describe(suite, **params)``; it refuses with ``Rejected`` and
+declares a capability absent with ``Unsupported`` (``imc_conformance.adapter_api``). Anything else it
+raises is an adapter error, never a pass.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Iterator
+
+from ..adapter_api import Rejected, Unsupported
+from ..core.session import AdapterStartError, Answer, Job, Request
+
+
+def _call(fn, *args, **kwargs) -> Answer:
+    """Call the adapter; any exception other than Rejected/Unsupported is an adapter error."""
+    try:
+        result = fn(*args, **kwargs)
+    except Rejected as exc:
+        return Answer("rejected", reason=exc.reason, rule=exc.rule)
+    except Unsupported as exc:
+        return Answer("unsupported", reason=str(exc))
+    except Exception as exc:  # an adapter bug must never pass a case
+        return Answer("adapter-error", reason=f"{type(exc).__name__}: {exc}")
+    if isinstance(result, dict):
+        return Answer("ok", message=result)
+    if isinstance(result, (bytes, bytearray, memoryview)):
+        return Answer("ok", frame=bytes(result))
+    return Answer("adapter-error", reason=f"the adapter returned a {type(result).__name__}, not bytes or an object")
+
+
+class LibrarySession:
+    """A session over an in-process adapter object; requests run one after the other.
+
+    A roundtrip reuses the implementation's answer to decoding the same frame (roundtrip is
+    encode(decode(frame))), which the plan asks for just before it.
+    """
+
+    incidents: tuple = ()  # an in-process adapter cannot break the protocol
+
+    def __init__(self, adapter, name: str):
+        self.adapter, self.name = adapter, name
+
+    def hello(self):
+        try:
+            return self.adapter.hello()
+        except Exception as exc:  # any failure of the adapter's own hello
+            raise AdapterStartError(f"the adapter's hello failed: {type(exc).__name__}: {exc}") from exc
+
+    def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
+        decoded: dict[str, Answer] = {}  # by encoding, for the current case
+        case = None
+        for job in jobs:
+            request = job.request
+            if job.case_id != case:
+                decoded.clear()
+                case = job.case_id
+            if request.op in ("decode", "roundtrip"):
+                key = request.encoding
+                answer = decoded.pop(key, None) or self._decode(job.suite, request)
+                if request.op == "decode":
+                    decoded[key] = answer  # kept for this frame's roundtrip check, which follows in plan order
+                    yield job, answer
+                else:
+                    yield job, self._encode(job.suite, answer.message, request) if answer.kind == "ok" else answer
+            elif request.op == "encode":
+                yield job, self._encode(job.suite, request.message, request)
+            else:
+                describe = getattr(self.adapter, "describe", None)
+                yield job, (_call(describe, job.suite, **request.params) if describe is not None
+                            else Answer("unsupported", reason="the adapter has no describe operation"))
+
+    def _decode(self, suite: str, request: Request) -> Answer:
+        return _call(self.adapter.decode, suite, bytes.fromhex(request.frame),
+                     **{k: v for k, v in request.params.items()})
+
+    def _encode(self, suite: str, message, request: Request) -> Answer:
+        return _call(self.adapter.encode, suite, message, request.encoding)
+
+    @property
+    def stderr(self) -> str:
+        return ""
+
+    def close(self) -> None:
+        close = getattr(self.adapter, "close", None)
+        if callable(close):
+            close()

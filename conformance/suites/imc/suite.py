@@ -1,0 +1,137 @@
+"""The IMC suite as the core sees it: its data folder, editions, byte orders, messages, codec, adapters."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+from functools import cached_property
+from pathlib import Path
+
+from ...core.suite import BuiltinAdapter, Group, Suite
+from ...kinds.vector import VectorKind
+from ...paths import VECTORS
+from . import codec
+from .compare import Comparator
+from .decoded_form import message_problem
+from .definitions import Definitions, load_definitions
+from .paths import IMC
+
+ADAPTERS_PACKAGE = "imc_conformance.adapters"
+
+
+class ImcCodec:
+    """The IMC reference codec and decoded-form policy, as the vector kind needs them."""
+
+    encodings = ("le", "be")
+
+    def __init__(self, defs: Definitions, rules: frozenset[str]):
+        self.defs, self.rules = defs, rules
+        self.comparator = Comparator(defs)
+
+    def encode(self, message: dict, encoding: str) -> bytes:
+        return codec.encode(self.defs, message, encoding)
+
+    def layout(self, frame: bytes, encoding: str, case: dict) -> list:
+        return codec.layout(self.defs, frame)
+
+    def differences(self, expected: dict, actual, nan_payload: bool) -> list:
+        return self.comparator.messages(expected, actual, nan_payload=nan_payload)
+
+    def malformed(self, message) -> str | None:
+        problem = message_problem(self.defs, message, whole_header=True, in_range=False)
+        return None if problem is None else f"malformed answer: message{problem[0]}: {problem[1]}"
+
+    def params(self, case: dict, op: str, encoding: str | None) -> dict:
+        return {}  # an IMC frame names its message and byte order itself
+
+    def describe_differences(self, expected: dict, actual) -> list[str]:
+        return ["IMC vectors have no describe check"]
+
+
+class ImcSuite(Suite):
+    name = "imc"
+    title = "IMC"
+    encodings = ImcCodec.encodings
+    encoding_param = "byte_order"
+    group_label = "message"
+    case_folders = {"cases": "vector"}
+
+    def __init__(self, folder: Path, defs: Definitions):
+        super().__init__(folder)
+        self.defs = defs
+        self.editions = ("imc-5.4.30", "imc-5.4.11")  # what imcpy and deployed DUNE speak first; the seeds second
+
+    @cached_property
+    def rules(self) -> list[dict]:
+        """The rules a refusal may name: the folder's own rules.json, else the packaged one."""
+        path = self.folder / "rules.json"
+        return json.loads((path if path.exists() else IMC / "rules.json").read_text(encoding="utf-8"))["rules"]
+
+    @cached_property
+    def groups(self) -> tuple[Group, ...]:
+        return tuple(Group(m.abbrev, str(m.id)) for m in self.defs.suite_messages)
+
+    @cached_property
+    def kinds(self) -> dict:
+        return {"vector": VectorKind(ImcCodec(self.defs, frozenset(r["id"] for r in self.rules)))}
+
+    @property
+    def adapters(self) -> dict[str, BuiltinAdapter]:
+        return {
+            "imcpy": BuiltinAdapter("imcpy", library=f"{ADAPTERS_PACKAGE}.imcpy_adapter:adapter",
+                                    help="imcpy, DUNE's C++ codec (library)"),
+            "pyimclsts": BuiltinAdapter("pyimclsts", library=f"{ADAPTERS_PACKAGE}.pyimclsts_adapter:adapter",
+                                        help="pyimclsts (library)"),
+            "imcpy-shim": BuiltinAdapter("imcpy-shim", argv=lambda: shim_argv("imcpy_shim.py"),
+                                         help="imcpy through the subprocess protocol"),
+            "pyimclsts-shim": BuiltinAdapter("pyimclsts-shim", argv=pyimclsts_shim_argv,
+                                             help="pyimclsts through the subprocess protocol"),
+        }
+
+    def schema(self, kind: str) -> Path:
+        return VECTORS / "schema" / "vectors.schema.json"
+
+    def group_of(self, doc: dict) -> str:
+        return doc["message"]["abbrev"]
+
+    def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
+        """The first problem of the case's message against the definitions (a decoded form needs its whole
+        header)."""
+        if "message" not in case:
+            return None
+        expects = {case["expect"]} if isinstance(case["expect"], str) else set(case["expect"].values())
+        decoded = expects & {"valid", "acceptable"} and any(c.startswith(("decode", "roundtrip")) for c in case["checks"])
+        problem = message_problem(self.defs, case["message"], whole_header=bool(decoded), in_range=True)
+        return None if problem is None else (".message" + problem[0], problem[1])
+
+    @cached_property
+    def errata(self) -> list[dict]:
+        path = self.folder / "errata.json"
+        return json.loads(path.read_text(encoding="utf-8"))["errata"] if path.exists() else []
+
+    def generate(self, check: bool) -> int:
+        from .corpus.build import main
+        return main(["--check"] if check else [])
+
+
+def shim_argv(script: str) -> list[str]:
+    """The command line of one of the subprocess shims shipped in ``adapters/``."""
+    folder = Path(importlib.import_module(ADAPTERS_PACKAGE).__file__).parent
+    return [sys.executable, str(folder / script)]
+
+
+def pyimclsts_shim_argv() -> list[str]:
+    from ...cache import cache_dir
+    from .imc_xml import fetch_imc_xml
+
+    return shim_argv("pyimclsts_shim.py") + ["--imc-xml", str(fetch_imc_xml()), "--cache",
+                                             str(cache_dir() / "pyimclsts-shim")]
+
+
+def load(folder: Path | None = None) -> ImcSuite:
+    """The IMC suite over its packaged data, or over a suite folder given instead (its definitions.json, if
+    it has one, replace the packaged definitions)."""
+    folder = Path(folder) if folder is not None else IMC
+    own = folder / "definitions.json"
+    return ImcSuite(folder, load_definitions(own if own.exists() else None))

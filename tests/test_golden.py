@@ -1,0 +1,41 @@
+"""The IMC suite's case ids, expectations and verdicts are pinned: the suite-generic core changed none of them.
+
+The golden files were written by the runner before the core became generic (list output for both editions)
+and by this one (a whole JSON result); a change to any of them must be deliberate: regenerate and review.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from imc_conformance.cli import main
+
+GOLDEN = Path(__file__).resolve().parent / "golden"
+
+
+@pytest.mark.parametrize("edition", ["imc-5.4.30", "imc-5.4.11"])
+def test_list_output_is_pinned(edition, capsys):
+    assert main(["list", "--edition", edition]) == 0
+    assert capsys.readouterr().out == (GOLDEN / f"list-{edition}.tsv").read_text(encoding="utf-8")
+
+
+def test_a_json_result_is_pinned(tmp_path, capsys):
+    path = tmp_path / "r.json"
+    assert main(["run", "--adapter", "imcpy", "--no-progress", "--message", "TextMessage", "--json", str(path)]) == 1
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    doc.update(started="2026-01-01T00:00:00+00:00", duration=0.0)
+    assert doc == json.loads((GOLDEN / "run-imcpy-TextMessage.json").read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("args, code", [
+    (["--message", "LblRange"], 0),
+    (["--id", "imc/TextMessage/text/text/utf8"], 1),
+    (["--adapter", "pyimclsts", "--message", "LblRange"], 1),
+    (["--adapter", "no_such_module:adapter"], 2),
+    (["--message", "NoSuchMessage"], 2),
+])
+def test_exit_codes_are_pinned(args, code, capsys):
+    assert main(["run", "--no-progress", *args]) == code
