@@ -40,7 +40,8 @@ import imcpy
 
 from imc_conformance.adapter_api import Rejected, Unsupported
 from imc_conformance.suites.imc.definitions import Definitions, FieldDef, MessageDef, load_definitions
-from imc_conformance.suites.imc.values import float_from_bits, float_to_bits, raw_bytes, text_bytes
+from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits
+from imc_conformance.suites.imc.values import raw_bytes, text_bytes
 
 SUITE = "imc"
 

@@ -62,7 +62,8 @@ from pathlib import Path
 from imc_conformance.adapter_api import Rejected, Unsupported
 from imc_conformance.suites.imc.definitions import Definitions, MessageDef, load_definitions
 from imc_conformance.suites.imc.imc_xml import cache_dir, fetch_imc_xml
-from imc_conformance.suites.imc.values import float_from_bits, float_to_bits, text_value
+from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits
+from imc_conformance.suites.imc.values import text_value
 
 PACKAGE = "pyimc_generated"  # fixed by pyimclsts.extract (_target_folder) and pyimclsts.network (_module_name)
 VERSION = importlib.metadata.version("pyimclsts")

@@ -1,4 +1,5 @@
-"""Benchmark: cases per second through the runner with imcpy, in-process and through a subprocess.
+"""Benchmark: cases per second through the runner, IMC with imcpy in-process and through a subprocess, and
+ros_acomms with rosbags and genpy in-process.
 
 ``python -m imc_conformance.benchmark [--repeat 5]`` prints medians over the repeats, all measured in
 one run (these machines are noisy: compare the ratios, not absolute numbers across runs):
@@ -7,7 +8,9 @@ one run (these machines are noisy: compare the ratios, not absolute numbers acro
   excludes interpreter start and corpus loading, which are reported apart);
 - imcpy alone: the same encode/decode calls made on imcpy directly, no adapter, no judging;
 - subprocess: the whole corpus through the pipelined subprocess adapter and the imcpy shim;
-- one process per case: the slow anchor, a fresh shim process for each case of a sample.
+- one process per case: the slow anchor, a fresh shim process for each case of a sample;
+- ros_acomms: its whole corpus (seed edition) through ``run_cases`` with rosbags and with genpy, and
+  rosbags' own calls made bare (deserialize every frame, serialize what it decoded).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from .core.runner import run_cases
 from .files import open_corpus, read_cases
 
 EDITION = "imc-5.4.30"
+ROS_EDITION = "seed"
 # (what, row, unit, bound): seconds must stay under the bound, cases/s must reach it.
 TARGETS = (("whole corpus in-process", "library", "s", 2.0),
            ("in-process throughput", "library", "cases/s", 20_000),
@@ -66,6 +70,24 @@ def imcpy_alone(suite, cases, emits: set[str]) -> float:
     return time.perf_counter() - start
 
 
+def rosbags_alone(adapter, suite, cases) -> float:
+    """Seconds for the bare rosbags calls the ROS corpus needs: deserialize every frame it decodes, serialize
+    again what deserialized (no adapter conversion, no judging)."""
+    work = []
+    for case in cases:
+        for request in suite.kinds[case.kind].plan(case.data, ROS_EDITION, {"ros1"}):
+            if request.op == "decode":
+                work.append((bytes.fromhex(request.frame), adapter._typename(case.data["type"])))
+    start = time.perf_counter()
+    store = adapter.store
+    for frame, typename in work:
+        try:
+            store.serialize_ros1(store.deserialize_ros1(frame, typename), typename)
+        except Exception:  # a rejected frame costs what it costs
+            pass
+    return time.perf_counter() - start
+
+
 def timed(fn) -> float:
     start = time.perf_counter()
     fn()
@@ -77,6 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--skip-subprocess", action="store_true")
+    parser.add_argument("--skip-ros", action="store_true")
     args = parser.parse_args(argv)
 
     from .adapters.imcpy_adapter import adapter
@@ -123,9 +146,36 @@ def main(argv: list[str] | None = None) -> int:
     if "subprocess" in med:
         print(f"subprocess vs library: {med['subprocess'] / med['library']:.1f}x slower; "
               f"pipelined subprocess vs one process per case: {med['process per case'] / med['subprocess']:.0f}x faster")
+    if not args.skip_ros:
+        ros_rows(args.repeat)
     for line in target_lines(med, n):
         print(line)
     return 0
+
+
+
+def ros_rows(repeat: int) -> None:
+    """The ros_acomms corpus through the runner with rosbags and with genpy, and rosbags' calls made bare."""
+    from .adapters.genpy_adapter import GenpyAdapter
+    from .adapters.rosbags_adapter import RosbagsAdapter
+    from .sessions.library import LibrarySession
+
+    suite, cases = open_corpus("ros_acomms")
+    cases = [c for c in cases if expectation(c.data, ROS_EDITION) is not None]
+    adapters = {"rosbags": RosbagsAdapter(), "genpy": GenpyAdapter()}
+    rows: dict[str, list[float]] = {"ros rosbags": [], "rosbags alone": [], "ros genpy": []}
+    for _ in range(repeat):
+        for name, adapter in adapters.items():
+            session = LibrarySession(adapter, name)
+            rows[f"ros {name}"].append(timed(lambda: run_cases(session, suite, cases, edition=ROS_EDITION, adapter=name)))
+        rows["rosbags alone"].append(rosbags_alone(adapters["rosbags"], suite, cases))
+    n = len(cases)
+    med = {k: statistics.median(v) for k, v in rows.items()}
+    print(f"ros_acomms corpus: {n} cases ({ROS_EDITION}); medians of {repeat} runs")
+    for name, seconds in med.items():
+        print(f"  {name:18s} {seconds:7.3f} s  {n / seconds:10,.0f} cases/s")
+    print(f"runner with rosbags vs rosbags' bare calls: {med['ros rosbags'] / med['rosbags alone']:.1f}x; "
+          f"genpy vs rosbags through the runner: {med['ros genpy'] / med['ros rosbags']:.2f}x")
 
 
 if __name__ == "__main__":

@@ -71,3 +71,22 @@ def pyimclsts_adapter():
 def records(cases):
     """The IMC corpus's case records, as the vector files hold them."""
     return [c.data for c in cases]
+
+
+@pytest.fixture(scope="session")
+def ros():
+    """The ros_acomms suite and its cases."""
+    return open_corpus("ros_acomms")
+
+
+@pytest.fixture(scope="session")
+def rosbags_adapter():
+    from imc_conformance.adapters.rosbags_adapter import RosbagsAdapter
+    return RosbagsAdapter()
+
+
+@pytest.fixture(scope="session")
+def genpy_adapter():
+    """genpy from Debian's packages, fetched into the cache on first use (apt-get download, dpkg -x)."""
+    from imc_conformance.adapters.genpy_adapter import GenpyAdapter
+    return GenpyAdapter()

@@ -19,7 +19,8 @@ from imc_conformance.adapter_api import Rejected, Unsupported
 from imc_conformance.suites.imc.codec import FOOTER_SIZE, HEADER_SIZE, ORDERS, EncodeError, FrameError
 from imc_conformance.suites.imc.crc16 import crc16
 from imc_conformance.suites.imc.definitions import MessageDef
-from imc_conformance.suites.imc.values import float_from_bits, text_bytes, text_value
+from imc_conformance.kinds.vector.floats import float_from_bits
+from imc_conformance.suites.imc.values import text_bytes, text_value
 
 MIN_NORMAL = {4: 2.0 ** -126, 8: 2.0 ** -1022}
 cached_crc16 = functools.cache(crc16)  # every mutant re-checks the same frames: keeps the runs fast

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from imc_conformance.suites.imc import codec
 from imc_conformance.suites.imc.crc16 import crc16
 from imc_conformance.suites.imc.definitions import load_definitions
-from imc_conformance.suites.imc.values import float_from_bits, float_to_bits, shortest_float
+from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits, shortest_float
 
 DEFS = load_definitions()
 

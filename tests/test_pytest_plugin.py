@@ -71,3 +71,9 @@ def test_an_unloadable_adapter_is_a_usage_error(pytester):
     result = pytester.runpytest("--conformance-adapter=no_such_module:adapter")
     assert result.ret == 4  # pytest's usage-error exit code
     result.stderr.fnmatch_lines(["*cannot load adapter 'no_such_module:adapter'*"])
+
+
+def test_the_plugin_runs_any_suite(pytester):
+    result = pytester.runpytest_subprocess("--conformance-suite=ros_acomms", "--conformance-adapter=rosbags",
+                                           "--conformance-message=Packet", "-q")
+    result.assert_outcomes(passed=48)

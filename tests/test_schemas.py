@@ -19,18 +19,28 @@ from jsonschema import Draft202012Validator
 from imc_conformance.paths import VECTORS
 
 SCHEMA_DIR = VECTORS / "schema"
-SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples")
+ROS_SCHEMAS = ("ros_acomms-definitions", "ros_acomms-vectors", "ros_acomms-errata", "ros_acomms-examples")
+SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples", *ROS_SCHEMAS, "waivers", "result")
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
 IMC = VECTORS / "imc"
+ROS = VECTORS / "ros_acomms"
 CASE_FILES = sorted((IMC / "cases").glob("*.json"))
 
 
 def schema_name_for(path: Path) -> str:
-    """Which schema a data file follows: cases/*.json are vector files, imc/<name>.json follow <name>."""
+    """Which schema a data file follows: imc/cases/*.json are IMC vector files, imc/<name>.json follow <name>;
+    ros_acomms/cases/*.json follow ros_acomms-vectors, ros_acomms/rules.json the shared rules schema, and
+    ros_acomms/<name>.json ros_acomms-<name>."""
     if path.parent == IMC / "cases":
         return "vectors"
     if path.parent == IMC and path.stem in SCHEMA_NAMES:
         return path.stem
+    if path.parent == ROS / "cases":
+        return "ros_acomms-vectors"
+    if path.parent == ROS and path.stem == "rules":
+        return "rules"
+    if path.parent == ROS and f"ros_acomms-{path.stem}" in SCHEMA_NAMES:
+        return f"ros_acomms-{path.stem}"
     raise LookupError(f"no schema for {path}")
 
 
@@ -97,14 +107,14 @@ def undocumented_properties(root: dict, node, where: str):
             continue
         if key == "properties":
             for prop, sub in value.items():
-                target = root["$defs"].get(sub.get("$ref", "").removeprefix("#/$defs/"), {})
+                target = root.get("$defs", {}).get(sub.get("$ref", "").removeprefix("#/$defs/"), {})
                 if "description" not in sub and "description" not in target:
                     yield f"{where}/properties/{prop}"
         yield from undocumented_properties(root, value, f"{where}/{key}")
 
 
 def test_every_data_file_has_a_schema_and_names_it():
-    assert len(CASE_FILES) == 31
+    assert len(CASE_FILES) == 31 and len(list((ROS / "cases").glob("*.json"))) == 38
     for path in DATA_FILES:
         name = schema_name_for(path)
         named = (path.parent / load(path)["$schema"]).resolve()

@@ -53,7 +53,7 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     if not complete:
         cases = [c for c in cases if plans[c.id] and len(results[c.id]) == len(plans[c.id])]
         notes.insert(0, f"interrupted: {len(cases)} of {len(plans)} cases were done; the others are not in this result")
-    untested, why = hello_gaps(suite, cases, edition, emits)
+    untested, why = hello_gaps(suite, cases, edition, emits, plans)
     notes += why
     waivers = waivers or {}
     filed: dict[str, list[CaseResult]] = defaultdict(list)
@@ -63,7 +63,8 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
         waiver = waivers.get(case.id)
         if waiver is not None:
             verdict = Verdict.WAIVED if failing(verdict, strict=True) else Verdict.WAIVER_STALE
-        explained = suite.implementation_errata(case.id, errata) if failing(verdict, strict=False) else []
+        explained = (suite.implementation_errata(case.id, errata, case.data.get("tags", ()))
+                     if failing(verdict, strict=False) else [])
         filed[case.group].append(CaseResult(case.id, case.group, verdict, expectation(case.data, edition),
                                             case.data["clause"], checks, case.data.get("rule"), explained,
                                             waiver.reason if waiver else None))
@@ -74,11 +75,14 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
                      list(session.incidents), untested)
 
 
-def hello_gaps(suite: Suite, cases: list[Case], edition: str, emits: set[str]) -> tuple[list[str], list[str]]:
-    """The check kinds the hello rules out for every case (untested), and notes on what it narrows."""
+def hello_gaps(suite: Suite, cases: list[Case], edition: str, emits: set[str], plans: dict) -> tuple[list[str], list[str]]:
+    """The check kinds the hello rules out for every case (untested), and notes on what it narrows; ``plans``:
+    the requests planned for what the implementation emits."""
     every = set(suite.encodings)
+    if emits == every:
+        return [], []
     wanted = Counter(r.check for c in cases for r in suite.kinds[c.kind].plan(c.data, edition, every))
-    planned = {r.check for c in cases for r in suite.kinds[c.kind].plan(c.data, edition, emits)}
+    planned = {r.check for c in cases for r in plans[c.id]}
     missing = sorted(check for check in wanted if check not in planned)
     if not missing:
         return [], []

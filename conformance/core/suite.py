@@ -94,12 +94,14 @@ class Suite(ABC):
     def errata(self) -> list[dict]:
         """The suite's errata (``id``, and for an implementation's: ``implementation`` and case globs)."""
 
-    def implementation_errata(self, case_id: str, key: str | None) -> list[str]:
-        """Ids of the errata of implementation ``key`` whose case globs match ``case_id``."""
+    def implementation_errata(self, case_id: str, key: str | None, tags=()) -> list[str]:
+        """Ids of the errata of implementation ``key`` that name the case: by a glob over case ids
+        (``cases``), or by tags the case has all of (``tags``)."""
         if key is None:
             return []
-        return [e["id"] for e in self.errata
-                if e.get("implementation") == key and any(fnmatch.fnmatchcase(case_id, g) for g in e.get("cases", ()))]
+        return [e["id"] for e in self.errata if e.get("implementation") == key and (
+            any(fnmatch.fnmatchcase(case_id, g) for g in e.get("cases", ()))
+            or ("tags" in e and set(e["tags"]) <= set(tags)))]
 
     @abstractmethod
     def generate(self, check: bool) -> int:

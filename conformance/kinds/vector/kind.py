@@ -3,7 +3,8 @@
 A vector case holds frames (hex, by encoding) and/or a message in the suite's decoded form, and says
 what a conforming implementation does with them: ``valid`` (encode to exactly the frame, decode to
 exactly the message, re-encode its own decoding to the same bytes, describe the type as given),
-``invalid`` (refuse, naming ``rule`` if it can) or ``acceptable`` (one of ``outcomes``). ``plan`` lists
+``invalid`` (refuse, naming ``rule`` if it can) or ``acceptable`` (one of ``outcomes``, each of which may
+give its own frames or decoded message). ``plan`` lists
 the requests a case needs for an implementation that emits some encodings; ``judge`` turns each answer
 into a check verdict, keeping both frames and the differing bytes (named by field) of a failure.
 """
@@ -42,22 +43,22 @@ class VectorCodec(Protocol):
     encodings: tuple[str, ...]
     rules: frozenset[str]  # the rule names a refusal may give
 
-    def encode(self, message: dict, encoding: str) -> bytes:
+    def encode(self, message: dict, encoding: str, edition: str) -> bytes:
         """The reference encoding; raises ValueError if the message cannot be encoded."""
 
-    def layout(self, frame: bytes, encoding: str, case: dict) -> list[Span]:
+    def layout(self, frame: bytes, encoding: str, case: dict, edition: str) -> list[Span]:
         """The byte map of a frame of this case; raises ValueError if the frame cannot be laid out."""
 
-    def differences(self, expected: dict, actual, nan_payload: bool) -> list:
+    def differences(self, expected: dict, actual, nan_payload: bool, edition: str) -> list:
         """How a decoded message differs from the expected one (each difference printable)."""
 
-    def malformed(self, message) -> str | None:
+    def malformed(self, message, case: dict, edition: str) -> str | None:
         """Why an answered message is not a well-formed decoded form (the adapter's fault), or None."""
 
     def params(self, case: dict, op: str, encoding: str | None) -> dict:
         """The operation's further parameters as the adapter protocol names them."""
 
-    def describe_differences(self, expected: dict, actual) -> list[str]:
+    def describe_differences(self, expected: dict, actual, case: dict, edition: str) -> list[str]:
         """How an answered description of a type differs from the expected one."""
 
 
@@ -109,46 +110,47 @@ class VectorKind:
             return CheckResult(request.check, Verdict.ADAPTER_ERROR, f"the refusal names the rule {answer.rule[:80]!r}, "
                                f"which the suite's rules do not have: {answer.reason}")
         if request.op == "describe":
-            return self._describe(case, request, answer)
+            return self._describe(case, edition, request, answer)
         expect = expectation(case, edition)
         if expect == "valid":
-            return self._valid(case, request, answer)
+            return self._valid(case, edition, request, answer)
         if expect == "invalid":
             return self._invalid(case, request, answer)
-        return self._acceptable(case, request, answer)
+        return self._acceptable(case, edition, request, answer)
 
-    def _describe(self, case, request, answer) -> CheckResult:
+    def _describe(self, case, edition, request, answer) -> CheckResult:
         if answer.kind == "rejected":
             return CheckResult(request.check, Verdict.FAIL, f"refused to describe the type: {answer.reason}")
-        diffs = self.codec.describe_differences(case["describe"], answer.message)
+        diffs = self.codec.describe_differences(case["describe"], answer.message, case, edition)
         if diffs and not isinstance(answer.message, dict):
             return CheckResult(request.check, Verdict.ADAPTER_ERROR, "malformed answer: no description object")
         if diffs:
             return CheckResult(request.check, Verdict.FAIL, "; ".join(diffs[:3]))
         return CheckResult(request.check, Verdict.PASS, "described as expected")
 
-    def _decoded_wrongly(self, case, request, answer, detail_prefix: str) -> CheckResult | None:
+    def _decoded_wrongly(self, case, edition, request, answer, detail_prefix: str) -> CheckResult | None:
         """None if the decoded message is the expected one; else an ADAPTER_ERROR (malformed answer) or FAIL."""
         diffs = self.codec.differences(case["message"], answer.message,
-                                       nan_payload=case.get("compare", {}).get("nan_payload", False))
+                                       case.get("compare", {}).get("nan_payload", False), edition)
         if not diffs:
             return None
-        malformed = self.codec.malformed(answer.message)
+        malformed = self.codec.malformed(answer.message, case, edition)
         if malformed:
             return CheckResult(request.check, Verdict.ADAPTER_ERROR, malformed)
         expected = bytes.fromhex(case["frames"][request.encoding])
-        return self.failure(case, request, detail_prefix + "; ".join(str(d) for d in diffs[:5]), expected,
-                            self.reencoded(answer.message, request.encoding))
+        return self.failure(case, edition, request, detail_prefix + "; ".join(str(d) for d in diffs[:5]), expected,
+                            self.reencoded(answer.message, request.encoding, edition))
 
-    def _valid(self, case, request, answer) -> CheckResult:
+    def _valid(self, case, edition, request, answer) -> CheckResult:
         check = request.check
         if answer.kind == "rejected":
             return CheckResult(check, Verdict.FAIL, f"refused a valid {request.op}: {answer.reason}")
         if request.op == "decode":
-            return self._decoded_wrongly(case, request, answer, "") or CheckResult(check, Verdict.PASS, "decoded as expected")
+            return (self._decoded_wrongly(case, edition, request, answer, "")
+                    or CheckResult(check, Verdict.PASS, "decoded as expected"))
         expected = bytes.fromhex(case["frames"][request.encoding])
         if answer.frame != expected:
-            return self.failure(case, request, "", expected, answer.frame, locate=True)
+            return self.failure(case, edition, request, "", expected, answer.frame, locate=True)
         return CheckResult(check, Verdict.PASS, "frame matches" if request.op == "encode" else "re-encoded to the same frame")
 
     def _invalid(self, case, request, answer) -> CheckResult:
@@ -160,7 +162,7 @@ class VectorKind:
             return CheckResult(check, Verdict.NON_STRICT, f"rejected, but named rule {answer.rule!r} instead of {rule!r}: {answer.reason}")
         return CheckResult(check, Verdict.PASS, f"rejected: {answer.reason}")
 
-    def _acceptable(self, case, request, answer) -> CheckResult:
+    def _acceptable(self, case, edition, request, answer) -> CheckResult:
         check = request.check
         permitted = {o["outcome"]: o for o in case["outcomes"]}
         if answer.kind == "rejected":
@@ -171,39 +173,43 @@ class VectorKind:
                 return CheckResult(check, Verdict.IMPL_DEFINED, f"rejected: {answer.reason}", "reject")
             return CheckResult(check, Verdict.FAIL, f"rejected, which this case does not permit: {answer.reason}")
         if request.op == "decode":
-            wrong = self._decoded_wrongly(case, request, answer, "accepted, but decoded wrongly: ")
-            if wrong is None and "accept" in permitted:
-                return CheckResult(check, Verdict.IMPL_DEFINED, "accepted", "accept")
-            return wrong or CheckResult(check, Verdict.FAIL, "accepted, which this case does not permit")
+            nan_payload = case.get("compare", {}).get("nan_payload", False)
+            for name, outcome in permitted.items():  # an outcome may decode to a message of its own
+                if name != "reject" and not self.codec.differences(outcome.get("message", case["message"]),
+                                                                  answer.message, nan_payload, edition):
+                    return CheckResult(check, Verdict.IMPL_DEFINED, "accepted" if name == "accept" else name, name)
+            return self._decoded_wrongly(case, edition, request, answer, "accepted, but decoded wrongly: ") or \
+                CheckResult(check, Verdict.FAIL, "accepted, which this case does not permit")
         frames = {name: o.get("frames", case.get("frames")) for name, o in permitted.items() if name != "reject"}
         for name, candidate in frames.items():
             if candidate and candidate.get(request.encoding) == (answer.frame or b"").hex():
                 return CheckResult(check, Verdict.IMPL_DEFINED, f"{name}: {answer.frame.hex()[:64]}", name)
         reference = bytes.fromhex((frames.get("accept") or next(iter(frames.values()), {}))[request.encoding])
-        return self.failure(case, request, "encoded to a frame no outcome permits: ", reference, answer.frame, locate=True)
+        return self.failure(case, edition, request, "encoded to a frame no outcome permits: ", reference, answer.frame,
+                            locate=True)
 
     # ------------------------------------------------------------ evidence
 
-    def failure(self, case: dict, request: Request, detail: str, expected: bytes, actual: bytes | None,
+    def failure(self, case: dict, edition: str, request: Request, detail: str, expected: bytes, actual: bytes | None,
                 locate: bool = False) -> CheckResult:
         """A FAIL that keeps both frames and the differing byte ranges, named by field; ``locate`` adds where
         the frames first differ to ``detail``. The expected frame is laid out once."""
-        spans = self._spans(expected, request.encoding, case) if actual is not None else []
+        spans = self._spans(expected, request.encoding, case, edition) if actual is not None else []
         if locate:
             detail += frame_difference(expected, actual, spans)
         return CheckResult(request.check, Verdict.FAIL, detail, expected=expected.hex(),
                            actual=None if actual is None else actual.hex(), diffs=byte_diffs(expected, actual, spans))
 
-    def _spans(self, frame: bytes, encoding: str, case: dict) -> list[Span]:
+    def _spans(self, frame: bytes, encoding: str, case: dict, edition: str) -> list[Span]:
         try:
-            return self.codec.layout(frame, encoding, case)
+            return self.codec.layout(frame, encoding, case, edition)
         except ValueError:  # an expected frame the codec cannot lay out (e.g. an out-of-type alternative)
             return []
 
-    def reencoded(self, message, encoding: str) -> bytes | None:
+    def reencoded(self, message, encoding: str, edition: str) -> bytes | None:
         """The reference encoding of an implementation's decoded message, to show what it understood."""
         try:
-            return self.codec.encode(message, encoding)
+            return self.codec.encode(message, encoding, edition)
         except (ValueError, KeyError, TypeError, AttributeError):
             return None
 

@@ -10,9 +10,11 @@ from __future__ import annotations
 import struct
 
 from ...kinds.vector import Span
+from ...kinds.vector.errors import EncodeError, FrameError
 from .crc16 import crc16
 from .definitions import SCALAR_FORMATS, Definitions, FieldDef, MessageDef
-from .values import float_from_bits, float_to_bits, raw_bytes, text_bytes, text_value
+from ...kinds.vector.floats import float_from_bits, float_to_bits
+from .values import raw_bytes, text_bytes, text_value
 
 HEADER_SIZE = 20
 FOOTER_SIZE = 2
@@ -20,22 +22,6 @@ ORDERS = {"le": "<", "be": ">"}
 HEADER_LAYOUT = ((0, 2, "sync", "uint16_t"), (2, 2, "mgid", "uint16_t"), (4, 2, "size", "uint16_t"),
                  (6, 8, "timestamp", "fp64_t"), (14, 2, "src", "uint16_t"), (16, 1, "src_ent", "uint8_t"),
                  (17, 2, "dst", "uint16_t"), (19, 1, "dst_ent", "uint8_t"))
-
-
-class FrameError(ValueError):
-    """A frame the codec rejects: ``rule`` is the rule id it breaks, ``offset`` where it was found."""
-
-    def __init__(self, rule: str, offset: int, detail: str):
-        super().__init__(f"{rule} at byte {offset}: {detail}")
-        self.rule, self.offset, self.detail = rule, offset, detail
-
-
-class EncodeError(ValueError):
-    """A message the codec refuses to encode, with the rule id it would break."""
-
-    def __init__(self, rule: str, detail: str):
-        super().__init__(f"{rule}: {detail}")
-        self.rule, self.detail = rule, detail
 
 
 def byte_order_of(frame: bytes) -> str | None:

@@ -7,23 +7,11 @@ exact NaN payloads; plaintext compares as bytes (a string stands for its UTF-8 e
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from .decoded_form import HEADER
 from .definitions import Definitions, FieldDef, MessageDef
-from .values import float_to_bits, raw_bytes, text_bytes
-
-
-@dataclass(frozen=True)
-class Difference:
-    path: str
-    expected: object
-    actual: object
-    why: str = ""
-
-    def __str__(self) -> str:
-        why = f" ({self.why})" if self.why else ""
-        return f"{self.path}: expected {self.expected!r}, got {self.actual!r}{why}"
+from ...kinds.vector.errors import Difference
+from ...kinds.vector.floats import same_float
+from .values import raw_bytes, text_bytes
 
 
 _MISSING = object()
@@ -70,7 +58,7 @@ class Comparator:
                 check(expected[name], value, f"{path}.{name}", nan_payload, out)
         if not extra_ok and len(actual) != len(checkers):
             for extra in sorted(set(actual) - {name for name, _ in checkers}):
-                out.append(Difference(f"{path}.{extra}", _MISSING, actual[extra], "not a field of " + path))
+                out.append(Difference(f"{path}.{extra}", None, actual[extra], "not a field of " + path))
 
     def _build(self, mdef: MessageDef) -> list:
         """(field name, checker) per field; a checker appends Differences to ``out``."""
@@ -81,7 +69,7 @@ class Comparator:
             width, type_ = f.size, f.type
 
             def check_float(e, a, path, nan_payload, out):
-                if not _same_float(e, a, width, nan_payload):
+                if not same_float(e, a, width, nan_payload):
                     pinned = nan_payload and a == "nan" and isinstance(e, str) and e.startswith("nan:")
                     out.append(Difference(path, e, a, type_ + ('; this case pins the NaN\'s bits: answer "nan:<hex>"'
                                                                if pinned else "")))
@@ -126,22 +114,3 @@ class Comparator:
             out.append(Difference(path, expected["abbrev"], actual.get("abbrev") if isinstance(actual, dict) else actual, "message type"))
             return
         self._fields(expected["abbrev"], expected["fields"], actual.get("fields"), f"{path}.{expected['abbrev']}", nan_payload, out)
-
-
-def _same_float(expected, actual, width: int, nan_payload: bool) -> bool:
-    if type(expected) is float and type(actual) is float and expected == actual and expected != 0.0:
-        return True  # the common case: equal finite non-zero values (zeros still need their sign compared)
-    try:
-        a = float_to_bits(actual, width)
-    except ValueError:
-        return False
-    e = float_to_bits(expected, width)
-    if not nan_payload and _is_nan(e, width) and _is_nan(a, width):
-        return True
-    return a == e
-
-
-def _is_nan(bits: int, width: int) -> bool:
-    exp_mask, frac_mask = ((0x7F800000, 0x007FFFFF) if width == 4 else (0x7FF0000000000000, 0x000FFFFFFFFFFFFF))
-    return bits & exp_mask == exp_mask and bool(bits & frac_mask)
-

@@ -12,7 +12,8 @@ an answer may hold any value of the right kind: a wrong value is the implementat
 from __future__ import annotations
 
 from .definitions import Definitions, FieldDef, MessageDef
-from .values import float_to_bits, raw_bytes, text_bytes
+from ...kinds.vector.floats import float_to_bits
+from .values import raw_bytes, text_bytes
 
 HEADER_TYPES = {"timestamp": "fp64_t", "src": "uint16_t", "src_ent": "uint8_t", "dst": "uint16_t", "dst_ent": "uint8_t"}
 HEADER = MessageDef(id=-1, abbrev="header", name="header", clause="imc-wire#frame-layout", min_payload=0,

@@ -3,18 +3,18 @@
 from __future__ import annotations
 
 import importlib
-import json
 import sys
 from functools import cached_property
 from pathlib import Path
 
-from ...core.suite import BuiltinAdapter, Group, Suite
+from ...core.suite import BuiltinAdapter, Group
 from ...kinds.vector import VectorKind
 from ...paths import VECTORS
 from . import codec
 from .compare import Comparator
 from .decoded_form import message_problem
 from .definitions import Definitions, load_definitions
+from ..data_suite import DataSuite
 from .paths import IMC
 
 ADAPTERS_PACKAGE = "imc_conformance.adapters"
@@ -29,44 +29,39 @@ class ImcCodec:
         self.defs, self.rules = defs, rules
         self.comparator = Comparator(defs)
 
-    def encode(self, message: dict, encoding: str) -> bytes:
+    def encode(self, message: dict, encoding: str, edition: str) -> bytes:
         return codec.encode(self.defs, message, encoding)
 
-    def layout(self, frame: bytes, encoding: str, case: dict) -> list:
+    def layout(self, frame: bytes, encoding: str, case: dict, edition: str) -> list:
         return codec.layout(self.defs, frame)
 
-    def differences(self, expected: dict, actual, nan_payload: bool) -> list:
+    def differences(self, expected: dict, actual, nan_payload: bool, edition: str) -> list:
         return self.comparator.messages(expected, actual, nan_payload=nan_payload)
 
-    def malformed(self, message) -> str | None:
+    def malformed(self, message, case: dict, edition: str) -> str | None:
         problem = message_problem(self.defs, message, whole_header=True, in_range=False)
         return None if problem is None else f"malformed answer: message{problem[0]}: {problem[1]}"
 
     def params(self, case: dict, op: str, encoding: str | None) -> dict:
         return {}  # an IMC frame names its message and byte order itself
 
-    def describe_differences(self, expected: dict, actual) -> list[str]:
+    def describe_differences(self, expected: dict, actual, case: dict, edition: str) -> list[str]:
         return ["IMC vectors have no describe check"]
 
 
-class ImcSuite(Suite):
+class ImcSuite(DataSuite):
     name = "imc"
     title = "IMC"
     encodings = ImcCodec.encodings
     encoding_param = "byte_order"
     group_label = "message"
     case_folders = {"cases": "vector"}
+    packaged = IMC
 
     def __init__(self, folder: Path, defs: Definitions):
         super().__init__(folder)
         self.defs = defs
         self.editions = ("imc-5.4.30", "imc-5.4.11")  # what imcpy and deployed DUNE speak first; the seeds second
-
-    @cached_property
-    def rules(self) -> list[dict]:
-        """The rules a refusal may name: the folder's own rules.json, else the packaged one."""
-        path = self.folder / "rules.json"
-        return json.loads((path if path.exists() else IMC / "rules.json").read_text(encoding="utf-8"))["rules"]
 
     @cached_property
     def groups(self) -> tuple[Group, ...]:
@@ -104,11 +99,6 @@ class ImcSuite(Suite):
         decoded = expects & {"valid", "acceptable"} and any(c.startswith(("decode", "roundtrip")) for c in case["checks"])
         problem = message_problem(self.defs, case["message"], whole_header=bool(decoded), in_range=True)
         return None if problem is None else (".message" + problem[0], problem[1])
-
-    @cached_property
-    def errata(self) -> list[dict]:
-        path = self.folder / "errata.json"
-        return json.loads(path.read_text(encoding="utf-8"))["errata"] if path.exists() else []
 
     def generate(self, check: bool) -> int:
         from .corpus.build import main

@@ -14,7 +14,7 @@ from ..definitions import FieldDef
 from . import samples
 from .records import MessageCases
 from .surgery import payload_of, reframe
-from .valid import F32_MAX
+from ....kinds.vector.floats import F32_MAX
 
 RECEIVERS = "imc-wire#what-real-receivers-do"
 ACCEPT_OR_REJECT = [{"outcome": "accept"}, {"outcome": "reject"}]

@@ -9,9 +9,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from ..definitions import Definitions, lint_definitions, load_definitions
+from ...data_suite import write_generated
 from ..paths import imc_data
 from .acceptable import add_acceptable
 from .coverage import coverage_markdown
@@ -64,22 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     for problem in lint_definitions(defs):  # reported, never "fixed": such values become acceptable encode cases
         print(f"definitions: {problem}")
     files = build_corpus(defs)
-    drift = [name for name, text in files.items()
-             if not (root / name).exists() or (root / name).read_text(encoding="utf-8") != text]
-    stale = [p.relative_to(root).as_posix() for p in sorted((root / "cases").glob("*.json"))
-             if p.relative_to(root).as_posix() not in files]
-    if args.check:
-        for name in drift + stale:
-            print(f"drift: vectors/imc/{name}")
-        return 1 if drift or stale else 0
-    (root / "cases").mkdir(exist_ok=True)
-    for name in stale:
-        (root / name).unlink()
-    for name in drift:
-        Path(root / name).write_text(files[name], encoding="utf-8")
-    total = sum(len(json.loads(t)["cases"]) for n, t in files.items() if n.startswith("cases/"))
-    print(f"{total} cases in {len(files) - 1} files; {len(drift)} written, {len(stale)} removed")
-    return 0
+    return write_generated(root, files, args.check, "vectors/imc")
 
 
 if __name__ == "__main__":

@@ -3,39 +3,12 @@ text and raw extremes, inline and list shapes. Every one is checked in both byte
 
 from __future__ import annotations
 
-import struct
-
+from ....kinds.vector.floats import FLOAT_CLASSES, NON_FINITE, PAYLOAD_NANS
 from .. import codec
 from ..definitions import FieldDef
 from . import samples
 from .records import ALL_CHECKS, MessageCases
 
-F32_MAX = struct.unpack("<f", struct.pack("<I", 0x7F7FFFFF))[0]
-F32_SUB_MIN = struct.unpack("<f", struct.pack("<I", 0x00000001))[0]
-F32_SUB_MAX = struct.unpack("<f", struct.pack("<I", 0x007FFFFF))[0]
-F32_NORM_MIN = struct.unpack("<f", struct.pack("<I", 0x00800000))[0]
-F64_SUB_MIN = struct.unpack("<d", struct.pack("<Q", 1))[0]
-F64_SUB_MAX = struct.unpack("<d", struct.pack("<Q", 0x000FFFFFFFFFFFFF))[0]
-
-# Boundary classes of a float field: name -> value per width (4, 8). Non-finite ones are only valid
-# where the field has no declared range.
-FLOAT_CLASSES = {
-    "zero": (0.0, 0.0),
-    "negative-zero": (-0.0, -0.0),
-    "max-finite": (F32_MAX, 1.7976931348623157e308),
-    "min-finite": (-F32_MAX, -1.7976931348623157e308),
-    "min-subnormal": (F32_SUB_MIN, F64_SUB_MIN),
-    "max-subnormal": (F32_SUB_MAX, F64_SUB_MAX),
-    "negative-min-subnormal": (-F32_SUB_MIN, -F64_SUB_MIN),
-    "min-normal": (F32_NORM_MIN, 2.2250738585072014e-308),
-    "nan": ("nan", "nan"),
-    "inf": ("inf", "inf"),
-    "negative-inf": ("-inf", "-inf"),
-    "nan-payload": ("nan:7fc00001", "nan:7ff8000000000001"),
-    "negative-nan": ("nan:ffc00000", "nan:fff8000000000000"),
-}
-NON_FINITE = ("nan", "inf", "negative-inf", "nan-payload", "negative-nan")
-PAYLOAD_NANS = {"class:nan-payload", "class:negative-nan"}  # cases about a NaN's exact bits
 HEADER_VARIANTS = {
     "zero": {"timestamp": 0.0, "src": 0, "src_ent": 0, "dst": 0, "dst_ent": 0},
     "non-default": {"timestamp": 1700000000.5, "src": 0x4101, "src_ent": 7, "dst": 0x001E, "dst_ent": 43},

@@ -1,0 +1,35 @@
+"""What a suite's reference codec raises, and how a comparison reports a difference: shared by every suite."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+class FrameError(ValueError):
+    """Bytes the codec rejects: ``rule`` is the rule id they break, ``offset`` where it was found."""
+
+    def __init__(self, rule: str, offset: int, detail: str):
+        super().__init__(f"{rule} at byte {offset}: {detail}")
+        self.rule, self.offset, self.detail = rule, offset, detail
+
+
+class EncodeError(ValueError):
+    """A message the codec refuses to encode, with the rule id it would break."""
+
+    def __init__(self, rule: str, detail: str):
+        super().__init__(f"{rule}: {detail}")
+        self.rule, self.detail = rule, detail
+
+
+@dataclass(frozen=True)
+class Difference:
+    """Where an answered message differs from the expected one."""
+
+    path: str
+    expected: object
+    actual: object
+    why: str = ""
+
+    def __str__(self) -> str:
+        why = f" ({self.why})" if self.why else ""
+        return f"{self.path}: expected {self.expected!r}, got {self.actual!r}{why}"

@@ -1,0 +1,53 @@
+"""What the suites share: definitions, rules and errata as JSON files of a data folder, and writing (or checking)
+the files a generator builds."""
+
+from __future__ import annotations
+
+import json
+from functools import cached_property
+from pathlib import Path
+
+from ..core.suite import Suite
+
+
+class DataSuite(Suite):
+    """A suite over a data folder: the packaged one (``packaged``), or one given instead with ``--vectors``."""
+
+    packaged: Path
+
+    def data(self, name: str) -> Path:
+        """The folder's own file ``name``, else the packaged one (definitions and rules belong to the suite)."""
+        own = self.folder / name
+        return own if own.exists() else self.packaged / name
+
+    @cached_property
+    def rules(self) -> list[dict]:
+        """The rules a refusal may name."""
+        return json.loads(self.data("rules.json").read_text(encoding="utf-8"))["rules"]
+
+    @cached_property
+    def errata(self) -> list[dict]:
+        """The errata of the folder itself: a corpus given instead brings its own, or none."""
+        path = self.folder / "errata.json"
+        return json.loads(path.read_text(encoding="utf-8"))["errata"] if path.exists() else []
+
+
+def write_generated(root: Path, files: dict[str, str], check: bool, label: str) -> int:
+    """Write the generated ``files`` (relative to ``root``) and remove case files no longer generated; with
+    ``check``, only print what differs (exit code 1 if anything does)."""
+    drift = [name for name, text in files.items()
+             if not (root / name).exists() or (root / name).read_text(encoding="utf-8") != text]
+    stale = [p.relative_to(root).as_posix() for p in sorted((root / "cases").glob("*.json"))
+             if p.relative_to(root).as_posix() not in files]
+    if check:
+        for name in drift + stale:
+            print(f"drift: {label}/{name}")
+        return 1 if drift or stale else 0
+    (root / "cases").mkdir(exist_ok=True)
+    for name in stale:
+        (root / name).unlink()
+    for name in drift:
+        (root / name).write_text(files[name], encoding="utf-8")
+    total = sum(len(json.loads(t)["cases"]) for n, t in files.items() if n.startswith("cases/"))
+    print(f"{total} cases in {len(files) - 1} files; {len(drift)} written, {len(stale)} removed")
+    return 0

@@ -1,0 +1,141 @@
+"""The ros_acomms suite as the core sees it: its data folder, editions, the ROS 1 encoding, types, codec,
+adapters, and the subcommand that writes the package's .msg and .srv files."""
+
+from __future__ import annotations
+
+from functools import cached_property
+from pathlib import Path
+
+from ...core.suite import BuiltinAdapter, Group
+from ...kinds.vector import VectorKind
+from ...paths import VECTORS
+from . import codec, forms
+from .definitions import DefinitionError, RosDefinitions, load_definitions
+from .msgtext import expected_types, parse_full_text, text_differences
+from .package_files import write_package
+from ..data_suite import DataSuite
+from .paths import ROS
+
+ADAPTERS_PACKAGE = "imc_conformance.adapters"
+
+
+class RosCodec:
+    """The ROS 1 reference codec and decoded-form policy, as the vector kind needs them."""
+
+    encodings = ("ros1",)
+
+    def __init__(self, defs: RosDefinitions, rules: frozenset[str]):
+        self.defs, self.rules = defs, rules
+
+    def encode(self, message: dict, encoding: str, edition: str) -> bytes:
+        return codec.encode(self.defs.edition(edition), message, encoding)
+
+    def layout(self, frame: bytes, encoding: str, case: dict, edition: str) -> list:
+        return codec.layout(self.defs.edition(edition), case["type"], frame)
+
+    def differences(self, expected: dict, actual, nan_payload: bool, edition: str) -> list:
+        return forms.differences(self.defs.edition(edition), expected, actual, nan_payload)
+
+    def malformed(self, message, case: dict, edition: str) -> str | None:
+        problem = forms.message_problem(self.defs.edition(edition), message, strict=False, expect_type=case["type"])
+        return None if problem is None else f"malformed answer: message{problem[0]}: {problem[1]}"
+
+    def params(self, case: dict, op: str, encoding: str | None) -> dict:
+        return {"type": case["type"]} if op == "describe" else {"type": case["type"], "encoding": encoding}
+
+    def describe_differences(self, expected: dict, actual, case: dict, edition: str) -> list[str]:
+        """The MD5 must be the expected one, the service's too where the answer gives it, and the definition
+        text must describe the same types, constants and fields (comments and layout aside)."""
+        if not isinstance(actual, dict):
+            return ["no description"]
+        out = [f"{key} {str(actual.get(key))[:40]!r}, expected {expected[key]}" for key in ("md5", "service_md5")
+               if key in expected and (key == "md5" or key in actual) and actual.get(key) != expected[key]]
+        text = actual.get("definition")
+        if not isinstance(text, str):
+            return out + ["no definition text"]
+        view = self.defs.edition(edition)
+        try:
+            described = parse_full_text(text, case["type"])
+        except DefinitionError as exc:
+            return out + [f"the definition text does not parse: {exc}"]
+        return out + text_differences(expected_types(view, view[case["type"]]), described)
+
+
+class RosSuite(DataSuite):
+    name = "ros_acomms"
+    title = "ros_acomms_msgs"
+    encodings = RosCodec.encodings
+    encoding_param = "encoding"
+    group_label = "type"
+    case_folders = {"cases": "vector"}
+    packaged = ROS
+
+    def __init__(self, folder: Path, defs: RosDefinitions):
+        super().__init__(folder)
+        self.defs = defs
+        self.editions = defs.editions
+
+    @cached_property
+    def groups(self) -> tuple[Group, ...]:
+        return tuple(Group(t.name, t.full if t.kind == "msg" else f"{t.package}/{t.service} ({t.kind})")
+                     for t in self.defs.suite_types)
+
+    @cached_property
+    def kinds(self) -> dict:
+        return {"vector": VectorKind(RosCodec(self.defs, frozenset(r["id"] for r in self.rules)))}
+
+    @property
+    def adapters(self) -> dict[str, BuiltinAdapter]:
+        return {
+            "rosbags": BuiltinAdapter("rosbags", library=f"{ADAPTERS_PACKAGE}.rosbags_adapter:RosbagsAdapter",
+                                      help="rosbags (library; --adapter-arg edition=E or msgs=DIR)"),
+            "genpy": BuiltinAdapter("genpy", library=f"{ADAPTERS_PACKAGE}.genpy_adapter:GenpyAdapter",
+                                    help="genpy from Debian (library; --adapter-arg edition=E or msgs=DIR)"),
+        }
+
+    def schema(self, kind: str) -> Path:
+        return VECTORS / "schema" / "ros_acomms-vectors.schema.json"
+
+    def group_of(self, doc: dict) -> str:
+        return doc["message"]["name"]
+
+    def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
+        """Per edition the case exists in: its type must exist, its MD5 must be the type's (a changed
+        definition invalidates exactly the cases that pinned the old one), its message must fit the type."""
+        from .msgtext import md5
+
+        editions = list(self.defs.editions) if isinstance(case["expect"], str) else list(case["expect"])
+        for name in editions:
+            view = self.defs.edition(name)
+            if case["type"] not in view:
+                return ".type", f"{case['type']} is not a type of edition {name}"
+            if case["md5"] != md5(view, view[case["type"]]):
+                return ".md5", f"{case['md5']} is not the MD5 of {case['type']} in edition {name}: the definition changed"
+            if "message" in case:  # an encoder input that must be refused may hold what its field cannot carry
+                problem = forms.message_problem(view, case["message"], strict=True, in_range="rule" not in case)
+                if problem:
+                    return ".message" + problem[0], f"{problem[1]} (edition {name})"
+        return None
+
+    def generate(self, check: bool) -> int:
+        from .corpus.build import main
+        return main(["--check"] if check else [])
+
+    def commands(self, subparsers) -> None:
+        files = subparsers.add_parser("ros-msg-files", help="write ros_acomms_msgs .msg and .srv files of an edition")
+        files.add_argument("folder", type=Path, help="where to write msg/ and srv/ (created if need be)")
+        files.add_argument("--edition", default=self.editions[0], choices=self.editions)
+        files.set_defaults(func=lambda args: self._write_package(args))
+
+    def _write_package(self, args) -> int:
+        written, left_out = write_package(self.defs.edition(args.edition), args.folder)
+        print(f"wrote {len(written)} files under {args.folder}" +
+              (f"; left out of edition {args.edition}: {', '.join(left_out)}" if left_out else ""))
+        return 0
+
+
+def load(folder: Path | None = None) -> RosSuite:
+    """The ros_acomms suite over its packaged data, or over a suite folder given instead."""
+    folder = Path(folder) if folder is not None else ROS
+    own = folder / "definitions.json"
+    return RosSuite(folder, load_definitions(own if own.exists() else None))
