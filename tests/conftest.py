@@ -69,8 +69,8 @@ def pyimclsts_adapter():
 
 @pytest.fixture(scope="session")
 def records(cases):
-    """The IMC corpus's case records, as the vector files hold them."""
-    return [c.data for c in cases]
+    """The IMC corpus's byte vectors, as the vector files hold them."""
+    return [c.data for c in cases if c.kind == "vector"]
 
 
 @pytest.fixture(scope="session")

@@ -1,7 +1,8 @@
 """The IMC suite's case ids, expectations and verdicts are pinned: the suite-generic core changed none of them.
 
-The golden files were written by the runner before the core became generic (list output for both editions)
-and by this one (a whole JSON result); a change to any of them must be deliberate: regenerate and review.
+The golden files were written by the runner before the core became generic (list output for both editions, to
+which the scenarios were appended when that case kind came) and by this one (a whole JSON result, whose format
+became 3 with the scenarios); a change to any of them must be deliberate: regenerate and review.
 """
 
 from __future__ import annotations

@@ -218,7 +218,7 @@ def test_markdown_summary(imcpy_result):
     assert text.splitlines()[0].startswith("## ❌ IMC conformance: FAIL — imcpy 1.1.2")
     assert "| Message | Verdict | PASS | FAIL | IMPL_DEFINED |" in text
     assert "| Announce (151) | ❌ FAIL | 163 | 6 | 16 |" in text
-    assert "<details><summary>66 failing or non-strict cases</summary>" in text
+    assert "<details><summary>66 failing, non-strict or inconclusive cases</summary>" in text
     assert "<code>imc/Announce/text/sys\\_name/utf8</code>" in text
     assert "and 16 more" in text
     assert text.count("| ❌ FAIL |") == 50 + sum(m.verdict == "FAIL" for m in imcpy_result.messages)

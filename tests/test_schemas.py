@@ -20,7 +20,8 @@ from imc_conformance.paths import VECTORS
 
 SCHEMA_DIR = VECTORS / "schema"
 ROS_SCHEMAS = ("ros_acomms-definitions", "ros_acomms-vectors", "ros_acomms-errata", "ros_acomms-examples")
-SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples", *ROS_SCHEMAS, "waivers", "result")
+SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples", "scenarios", "exchanges", "profile",
+                *ROS_SCHEMAS, "waivers", "result")
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
 IMC = VECTORS / "imc"
 ROS = VECTORS / "ros_acomms"
@@ -28,11 +29,16 @@ CASE_FILES = sorted((IMC / "cases").glob("*.json"))
 
 
 def schema_name_for(path: Path) -> str:
-    """Which schema a data file follows: imc/cases/*.json are IMC vector files, imc/<name>.json follow <name>;
+    """Which schema a data file follows: imc/cases/*.json are IMC vector files, */scenarios/*.json scenario files,
+    */profiles/*.json profiles, imc/<name>.json follow <name>;
     ros_acomms/cases/*.json follow ros_acomms-vectors, ros_acomms/rules.json the shared rules schema, and
     ros_acomms/<name>.json ros_acomms-<name>."""
     if path.parent == IMC / "cases":
         return "vectors"
+    if path.parent.name == "scenarios":
+        return "scenarios"
+    if path.parent.name == "profiles":
+        return "profile"
     if path.parent == IMC and path.stem in SCHEMA_NAMES:
         return path.stem
     if path.parent == ROS / "cases":

@@ -12,7 +12,7 @@ from imc_conformance.files import open_corpus
 
 SUITE, _CASES = open_corpus("imc")
 KIND = SUITE.kinds["vector"]
-CASES = [c.data for c in _CASES]
+CASES = [c.data for c in _CASES if c.kind == "vector"]
 EDITION = "imc-5.4.30"
 SAMPLE = [c for c in CASES if c["id"].startswith(("imc/LblConfig/", "imc/AcousticOperation/", "imc/Announce/"))]
 

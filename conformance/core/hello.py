@@ -8,7 +8,7 @@ from .session import AdapterStartError
 def check_hello(info, suite: str, encodings_key: str, encodings: tuple[str, ...]) -> dict:
     """``implementation`` (text), ``suites`` (must list ``suite``), the encodings the implementation emits
     under ``encodings_key`` (e.g. ``byte_orders``), and optionally ``errata`` (the key of the implementation
-    errata that apply to it); raises AdapterStartError saying what is wrong."""
+    errata that apply to it) and ``kinds`` (the case kinds it runs: ``vector`` by default); raises AdapterStartError saying what is wrong."""
     if not isinstance(info, dict):
         raise AdapterStartError(f"the adapter's hello answered a {type(info).__name__}, not an object")
     implementation, suites, emits = info.get("implementation"), info.get("suites"), info.get(encodings_key)
@@ -25,4 +25,8 @@ def check_hello(info, suite: str, encodings_key: str, encodings: tuple[str, ...]
     errata = info.get("errata")
     if errata is not None and not isinstance(errata, str):
         raise AdapterStartError("the adapter's hello gives 'errata' as something other than a string")
-    return {"implementation": implementation, "suites": suites, "emits": emits, "errata": errata}
+    kinds = info.get("kinds", ["vector"])
+    if not isinstance(kinds, list) or not kinds or not all(isinstance(k, str) for k in kinds):
+        raise AdapterStartError(f"the adapter's hello gives 'kinds' as something other than a list of case kinds "
+                                f"(got {str(kinds)[:80]})")
+    return {"implementation": implementation, "suites": suites, "emits": emits, "errata": errata, "kinds": kinds}

@@ -11,12 +11,12 @@ import re
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 
-from .verdicts import Verdict, failing
+from .verdicts import UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
-VERSION = 2
+VERSION = 3
 FORMAT = f"{FORMAT_NAME}/{VERSION}"
-SCHEMAS = {1: "result-1.schema.json", 2: "result.schema.json"}
+SCHEMAS = {1: "result-1.schema.json", 2: "result-2.schema.json", 3: "result.schema.json"}
 INTERRUPTED = 130  # the exit code of a run stopped by Ctrl-C, as shells report SIGINT
 
 
@@ -39,6 +39,17 @@ class CheckResult:
     actual: str | None = None
     diffs: tuple[ByteDiff, ...] = ()
     note: str | None = None  # a remark on how the answer was obtained (Answer.note)
+    clause: str | None = None  # the clause this check rests on, where it is not the case's (a scenario step's)
+    filed_under: str | None = None  # the group a finding belongs to, where it is not the case's (a reply's bytes)
+
+
+@dataclass(slots=True)
+class Judgement:
+    """What a case kind makes of one answer when one check is not enough: several checks (a scenario's steps)
+    and the evidence they rest on (a timeline of what was sent and received)."""
+
+    checks: list[CheckResult]
+    timeline: list[dict] = field(default_factory=list)
 
 
 @dataclass
@@ -65,6 +76,7 @@ class CaseResult:
     rule: str | None = None
     errata: list[str] = field(default_factory=list)  # implementation errata that explain a failure
     waiver: str | None = None  # the waiver's reason, when one applies
+    timeline: list[dict] = field(default_factory=list)  # a scenario's exchange, entry by entry
 
     @property
     def notes(self) -> list[str]:
@@ -85,7 +97,7 @@ class MessageResult:
 
     name: str
     key: str
-    verdict: str  # PASS | FAIL
+    verdict: str  # PASS | FAIL | INCONCLUSIVE (every case untested)
     cases: list[CaseResult]
 
     @property
@@ -120,13 +132,16 @@ class RunResult:
         return {v.value: counts[v.value] for v in Verdict if counts[v.value]}
 
     def exit_code(self) -> int:
-        """130 if interrupted; else 2 for an adapter error or protocol violation; else 1 for a failing verdict,
-        a crash incident or (under --strict) a check kind left untested; else 0."""
+        """130 if interrupted; else 2 for an adapter error or protocol violation, or when nothing was tested
+        (every case INCONCLUSIVE or UNSUPPORTED); else 1 for a failing verdict, a crash incident or (under
+        --strict) a check kind left untested; else 0."""
         if not self.complete:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
         if Verdict.ADAPTER_ERROR in verdicts or any(i.kind == "protocol" for i in self.incidents):
             return 2
+        if not verdicts or (Verdict.INCONCLUSIVE in verdicts and verdicts <= set(UNTESTED)):
+            return 2  # nothing was tested
         if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested):
             return 1
         return 0
@@ -172,7 +187,11 @@ def format_version(doc) -> int:
 
 
 def message_verdict(cases: list[CaseResult], strict: bool) -> str:
-    return "FAIL" if any(failing(c.verdict, strict) for c in cases) else "PASS"
+    """FAIL if a case fails; INCONCLUSIVE if no case tested anything and one could not be tested; else PASS."""
+    if any(failing(c.verdict, strict) for c in cases):
+        return "FAIL"
+    verdicts = {c.verdict for c in cases}
+    return "INCONCLUSIVE" if Verdict.INCONCLUSIVE in verdicts and verdicts <= set(UNTESTED) else "PASS"
 
 
 def case_dict(c: CaseResult) -> dict:
@@ -183,9 +202,12 @@ def case_dict(c: CaseResult) -> dict:
         out["errata"] = c.errata
     if c.waiver:
         out["waiver"] = c.waiver
+    if c.timeline:
+        out["timeline"] = c.timeline
     out["checks"] = []
     for k in c.checks:
-        check = {key: list(value) if key == "diffs" else value for key, value in asdict(k).items() if value not in (None, ())}
+        check = {key: list(value) if key == "diffs" else value for key, value in asdict(k).items()
+                 if value not in (None, ()) and key != "filed_under"}
         check["verdict"] = k.verdict.value
         out["checks"].append(check)
     return out
@@ -193,6 +215,7 @@ def case_dict(c: CaseResult) -> dict:
 
 def case_from(d: dict, message: str) -> CaseResult:
     checks = [CheckResult(k["check"], Verdict(k["verdict"]), k["detail"], k.get("outcome"), k.get("expected"), k.get("actual"),
-                          tuple(ByteDiff(**b) for b in k.get("diffs", ())), k.get("note")) for k in d["checks"]]
+                          tuple(ByteDiff(**b) for b in k.get("diffs", ())), k.get("note"), k.get("clause"))
+              for k in d["checks"]]
     return CaseResult(d["id"], message, Verdict(d["verdict"]), d["expect"], d["clause"], checks, d.get("rule"),
-                      d.get("errata", []), d.get("waiver"))
+                      d.get("errata", []), d.get("waiver"), d.get("timeline", []))

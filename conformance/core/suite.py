@@ -15,18 +15,20 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Protocol
 
-from .results import CheckResult
+from .results import CheckResult, Judgement
 from .session import Answer, Request
 
 
 class CaseKind(Protocol):
-    """Plans the requests a case needs and judges each answer; pure (no I/O)."""
+    """Plans the requests a case needs and judges each answer; pure (no I/O). ``options``: the run's settings
+    (see ``run_cases``). A kind may also have ``admit(case, options) -> str | None``: why it declines to run
+    a case under these options (effects not allowed), or None."""
 
     name: str
 
-    def plan(self, case: dict, edition: str, emits: set[str]) -> list[Request]: ...
+    def plan(self, case: dict, edition: str, emits: set[str], options: dict) -> list[Request]: ...
 
-    def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult: ...
+    def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult | Judgement: ...
 
 
 @dataclass(frozen=True)
@@ -109,3 +111,12 @@ class Suite(ABC):
 
     def commands(self, subparsers) -> None:
         """Add the suite's own subcommands to the command line (none by default)."""
+
+    def open_target(self, target: str, **settings):
+        """A session with a live target (``--target``), for the suite's scenarios; ValueError with a one-line
+        reason if it cannot be opened. Settings: ``bind``, ``src``, ``dst``, ``allow_group``, ``startup``."""
+        raise ValueError(f"the suite {self.name!r} has no live targets")
+
+    def profile(self, name: str) -> dict:
+        """The profile ``name`` of the suite's scenarios (``profiles/<name>.json``); ValueError if unknown."""
+        raise ValueError(f"the suite {self.name!r} has no profiles")

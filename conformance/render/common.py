@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 from ..core.results import INTERRUPTED, CaseResult, RunResult
-from ..core.verdicts import FAILING, Verdict
+from ..core.verdicts import FAILING, UNTESTED, Verdict
 
 VERDICTS = tuple(Verdict)
-# The cases a report details: every failing verdict, and NON_STRICT even when it does not fail the run.
-ATTENTION = (*FAILING, Verdict.NON_STRICT)
+# The cases a report details: every failing verdict, and NON_STRICT and INCONCLUSIVE even when they do not fail the run.
+ATTENTION = (*FAILING, Verdict.NON_STRICT, Verdict.INCONCLUSIVE)
+TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
 
 _ANSI = re.compile(r"\x1b\[[0-?]*[ -/]*[@-~]")
 # Controls (C0 but tab, DEL, C1), line and paragraph separators, bidirectional and invisible format characters.
@@ -29,8 +31,26 @@ def printable(text: str | None) -> str:
 
 
 def overall(result: RunResult) -> str:
-    """PASS, FAIL, ERROR (an adapter error) or INCOMPLETE (interrupted), from the run's exit code."""
-    return {0: "PASS", 1: "FAIL", INTERRUPTED: "INCOMPLETE"}.get(result.exit_code(), "ERROR")
+    """PASS, FAIL, ERROR (an adapter error), INCONCLUSIVE (nothing could be tested) or INCOMPLETE (interrupted),
+    from the run's exit code."""
+    code = result.exit_code()
+    if code == 2 and not result.incidents and all(c.verdict in UNTESTED for c in result.cases):
+        return "INCONCLUSIVE"
+    return {0: "PASS", 1: "FAIL", INTERRUPTED: "INCOMPLETE"}.get(code, "ERROR")
+
+
+def timeline_lines(case: CaseResult, limit: int = TIMELINE_LIMIT) -> list[str]:
+    """A scenario's timeline as text lines: time, event, step, message, fields, note (raw bytes are left to the
+    JSON and HTML reports)."""
+    lines = []
+    for e in case.timeline[:limit]:
+        fields = json.dumps(e["fields"], ensure_ascii=False) if "fields" in e else ""
+        step = f" [{e['step']}]" if "step" in e else ""
+        note = f" — {e['note']}" if "note" in e else ""
+        lines.append(f"{e['t']:8.3f} s {e['event']}{step} {e.get('message', '')} {fields}{note}".rstrip())
+    if len(case.timeline) > limit:
+        lines.append(f"… {len(case.timeline) - limit} more entries in the JSON result")
+    return lines
 
 
 def incident_lines(result: RunResult) -> list[str]:

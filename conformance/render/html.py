@@ -6,6 +6,7 @@ both frames show them side by side as hex dumps, the differing bytes marked and 
 
 from __future__ import annotations
 
+import json
 from functools import cache
 from pathlib import Path
 
@@ -14,7 +15,7 @@ from jinja2 import Environment, FileSystemLoader, StrictUndefined
 from ..core.results import ByteDiff
 from ..core.verdicts import Verdict
 from ..core.results import FORMAT, CaseResult, RunResult
-from .common import attention, clean, incident_lines, overall, verdict_columns
+from .common import TIMELINE_LIMIT, attention, clean, incident_lines, overall, verdict_columns
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 MAX_DETAILED = 200  # failing cases shown in full
@@ -25,8 +26,9 @@ FULL_DUMP_ROWS = 24  # longer frames show only the rows around differences
 TONE = {
     Verdict.PASS: "ok", Verdict.FAIL: "bad", Verdict.CRASH: "bad", Verdict.TIMEOUT: "bad", Verdict.ADAPTER_ERROR: "bad",
     Verdict.NON_STRICT: "warn", Verdict.WAIVER_STALE: "warn", Verdict.IMPL_DEFINED: "info",
-    Verdict.UNSUPPORTED: "mute", Verdict.WAIVED: "mute",
+    Verdict.UNSUPPORTED: "mute", Verdict.WAIVED: "mute", Verdict.INCONCLUSIVE: "info",
 }
+GROUP_TONE = {"PASS": "ok", "FAIL": "bad", "INCONCLUSIVE": "info"}
 
 
 @cache
@@ -34,6 +36,7 @@ def environment() -> Environment:
     env = Environment(loader=FileSystemLoader(TEMPLATES), autoescape=True, trim_blocks=True, lstrip_blocks=True,
                       undefined=StrictUndefined)
     env.filters["text"] = clean
+    env.filters["json_text"] = lambda value: clean(json.dumps(value, ensure_ascii=False))  # autoescaped as text
     return env
 
 
@@ -47,7 +50,7 @@ def render_html(result: RunResult) -> str:
     return environment().get_template("report.html.j2").render(
         result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown,
         incidents=incident_lines(result), format=FORMAT,
-        failing_total=len(failing), first_failure=first, stderr=stderr[:MAX_STDERR],
+        failing_total=len(failing), first_failure=first, group_tone=GROUP_TONE, stderr=stderr[:MAX_STDERR],
         stderr_cut=max(0, len(stderr) - MAX_STDERR))
 
 
@@ -58,7 +61,8 @@ def case_view(case: CaseResult, index: int) -> dict:
         if k.expected is not None:
             pairs.setdefault((k.expected, k.actual, k.diffs), []).append(k.check)
     return {"case": case, "anchor": f"case-{index + 1}",
-            "frames": [frame_pair(e, a, d, checks) for (e, a, d), checks in pairs.items()]}
+            "frames": [frame_pair(e, a, d, checks) for (e, a, d), checks in pairs.items()],
+            "timeline": case.timeline[:TIMELINE_LIMIT], "timeline_cut": max(0, len(case.timeline) - TIMELINE_LIMIT)}
 
 
 def frame_pair(expected: str, actual: str | None, diffs: tuple[ByteDiff, ...], checks: list[str]) -> dict:

@@ -1,7 +1,7 @@
 """JUnit XML for CI test views: one testsuite per message, one testcase per case.
 
-FAIL and WAIVER_STALE (and NON_STRICT under --strict) are failures; CRASH, TIMEOUT and ADAPTER_ERROR
-are errors; UNSUPPORTED is skipped; WAIVED, IMPL_DEFINED and a lenient NON_STRICT pass with a note in
+FAIL and WAIVER_STALE (and NON_STRICT and INCONCLUSIVE under --strict) are failures; CRASH, TIMEOUT and
+ADAPTER_ERROR are errors; UNSUPPORTED and a lenient INCONCLUSIVE are skipped; a scenario's timeline goes with it; WAIVED, IMPL_DEFINED and a lenient NON_STRICT pass with a note in
 ``<system-out>``. Implementation text is stripped of what XML 1.0 cannot carry; ElementTree escapes the rest.
 """
 
@@ -12,7 +12,7 @@ from collections import Counter
 
 from ..core.verdicts import Verdict, failing
 from ..core.results import CaseResult, RunResult
-from .common import clean, incident_lines
+from .common import clean, incident_lines, timeline_lines
 
 ERRORS = {Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR}
 MESSAGE_LIMIT = 500  # characters of detail in a failure's message attribute
@@ -25,7 +25,7 @@ def outcome(case: CaseResult, strict: bool) -> str | None:
         return "error"
     if failing(v, strict):
         return "failure"
-    if v is Verdict.UNSUPPORTED:
+    if v in (Verdict.UNSUPPORTED, Verdict.INCONCLUSIVE):
         return "skipped"
     return None if v is Verdict.PASS and not case.notes else "note"
 
@@ -44,6 +44,8 @@ def body(case: CaseResult) -> str:
         if k.expected:
             lines += [f"  expected {k.expected}", f"  actual   {k.actual or '(none)'}"]
         lines += [f"  bytes {d.start}-{d.end - 1} = {d.field}" for d in k.diffs]
+    if case.timeline:
+        lines += ["timeline:", *(f"  {line}" for line in timeline_lines(case))]
     return clean("\n".join(lines))
 
 

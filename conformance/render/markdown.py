@@ -6,16 +6,17 @@ import re
 
 from ..core.verdicts import Verdict
 from ..core.results import RunResult
-from .common import attention, clean, incident_lines, overall, verdict_columns
+from .common import TIMELINE_LIMIT, attention, clean, incident_lines, overall, verdict_columns
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",
     Verdict.UNSUPPORTED: "⏭️", Verdict.CRASH: "💥", Verdict.TIMEOUT: "⏱️", Verdict.ADAPTER_ERROR: "🛠️",
-    Verdict.WAIVED: "🙈", Verdict.WAIVER_STALE: "🧹",
+    Verdict.WAIVED: "🙈", Verdict.WAIVER_STALE: "🧹", Verdict.INCONCLUSIVE: "❔",
 }
-OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸️"}
+OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸️", "INCONCLUSIVE": "❔"}
 MAX_CASES = 50
 MAX_DETAIL = 300
+MAX_TIMELINES = 10  # scenarios whose timeline is shown
 
 _ENTITIES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "&#124;", "`": "&#96;"}
 _SPECIAL = re.compile(r"[&<>|`]|[\\*_\[\]~]")
@@ -57,11 +58,17 @@ def render_markdown(result: RunResult) -> str:
         lines += [""] + [f"- {cell(note)}" for note in result.notes]
     failing = attention(result)
     if failing:
-        lines += ["", f"<details><summary>{len(failing)} failing or non-strict cases</summary>", "",
+        lines += ["", f"<details><summary>{len(failing)} failing, non-strict or inconclusive cases</summary>", "",
                   "| Case | Verdict | Detail | Errata |", "|---|---|---|---|"]
         lines += [f"| <code>{cell(c.id)}</code> | {EMOJI[c.verdict]} {c.verdict.value} | {cell(c.detail, MAX_DETAIL)} | "
                   f"{cell(', '.join(c.errata))} |" for c in failing[:MAX_CASES]]
         if len(failing) > MAX_CASES:
             lines += ["", f"and {len(failing) - MAX_CASES} more (see the full report)."]
         lines += ["", "</details>"]
+        for c in [c for c in failing if c.timeline][:MAX_TIMELINES]:
+            lines += ["", f"<details><summary>timeline of <code>{cell(c.id)}</code></summary>", "",
+                      "| Time (s) | Event | Step | Message | Note |", "|--:|---|---|---|---|"]
+            lines += [f"| {e['t']:.3f} | {cell(e['event'])} | {cell(e.get('step', ''))} | {cell(e.get('message', ''))} | "
+                      f"{cell(e.get('note', ''), MAX_DETAIL)} |" for e in c.timeline[:TIMELINE_LIMIT]]
+            lines += ["", "</details>"]
     return "\n".join(lines) + "\n"

@@ -12,10 +12,11 @@ from rich.table import Table
 
 from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
-from .common import incident_lines, printable
+from .common import incident_lines, printable, timeline_lines
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
 SHOWN_FAILURES = 20
+SHOWN_TIMELINE = 12  # timeline entries under a failing scenario
 
 
 def safe(text: str | None) -> str:
@@ -37,7 +38,7 @@ def print_result(result: RunResult, console: Console) -> None:
         counts = m.counts
         other = sum(n for v, n in counts.items() if v not in COLUMNS)
         errata = sorted({e for c in m.cases for e in c.errata})
-        colour = "green" if m.verdict == "PASS" else "red"
+        colour = {"PASS": "green", "FAIL": "red"}.get(m.verdict, "yellow")
         table.add_row(safe(m.name), safe(m.key), f"[{colour}]{m.verdict}[/]", *(str(counts[v]) for v in COLUMNS),
                       str(other), safe(", ".join(errata)))
     console.print(table)
@@ -45,6 +46,13 @@ def print_result(result: RunResult, console: Console) -> None:
     for c in shown[:SHOWN_FAILURES]:
         errata = f" [dim](erratum {safe(', '.join(c.errata))})[/]" if c.errata else ""
         console.print(f"[red]{c.verdict.value}[/] {safe(c.id)}{errata}: {safe(c.detail[:300])}")
+        for line in timeline_lines(c, SHOWN_TIMELINE):
+            console.print(f"    [dim]{safe(line[:200])}[/]")
+    inconclusive = [c for c in result.cases if c.verdict is Verdict.INCONCLUSIVE and not failing(c.verdict, result.strict)]
+    for c in inconclusive[:SHOWN_FAILURES]:
+        console.print(f"[yellow]INCONCLUSIVE[/] {safe(c.id)}: {safe(c.detail[:300])}")
+    if len(inconclusive) > SHOWN_FAILURES:
+        console.print(f"… and {len(inconclusive) - SHOWN_FAILURES} more inconclusive cases")
     if len(shown) > SHOWN_FAILURES:
         console.print(f"… and {len(shown) - SHOWN_FAILURES} more failing cases (see --json/--html reports)")
     for line in incident_lines(result):

@@ -26,6 +26,26 @@ class DataSuite(Suite):
         return json.loads(self.data("rules.json").read_text(encoding="utf-8"))["rules"]
 
     @cached_property
+    def behaviour(self) -> dict:
+        """The exchanges file: request/reply rules, and the parameters, effects and services of scenarios."""
+        return json.loads(self.data("exchanges.json").read_text(encoding="utf-8"))
+
+    def profile(self, name: str) -> dict:
+        """A profile of the folder, else of the packaged data, checked against its schema."""
+        from ..files import read_json, schema_error
+        from ..paths import VECTORS
+
+        known = sorted({p.stem for folder in (self.folder, self.packaged) for p in (folder / "profiles").glob("*.json")})
+        if name not in known:
+            raise ValueError(f"unknown profile {name!r} of the suite {self.name!r} (profiles: {', '.join(known) or 'none'})")
+        path = self.data(f"profiles/{name}.json")
+        _, doc = read_json(path)
+        problem = schema_error(VECTORS / "schema" / "profile.schema.json", doc, str(path))
+        if problem:
+            raise ValueError(problem)
+        return doc
+
+    @cached_property
     def errata(self) -> list[dict]:
         """The errata of the folder itself: a corpus given instead brings its own, or none."""
         path = self.folder / "errata.json"

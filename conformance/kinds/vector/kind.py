@@ -72,7 +72,7 @@ class VectorKind:
 
     # ------------------------------------------------------------ planning
 
-    def plan(self, case: dict, edition: str, emits: set[str]) -> list[Request]:
+    def plan(self, case: dict, edition: str, emits: set[str], options: dict | None = None) -> list[Request]:
         """The requests to make for ``case``; encoding in an encoding the implementation does not emit is not
         applicable."""
         if expectation(case, edition) is None:

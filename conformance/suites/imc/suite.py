@@ -8,6 +8,7 @@ from functools import cached_property
 from pathlib import Path
 
 from ...core.suite import BuiltinAdapter, Group
+from ...kinds.scenario import ScenarioKind
 from ...kinds.vector import VectorKind
 from ...paths import VECTORS
 from . import codec
@@ -16,6 +17,7 @@ from .decoded_form import message_problem
 from .definitions import Definitions, load_definitions
 from ..data_suite import DataSuite
 from .paths import IMC
+from .wire import ImcWire
 
 ADAPTERS_PACKAGE = "imc_conformance.adapters"
 
@@ -55,7 +57,7 @@ class ImcSuite(DataSuite):
     encodings = ImcCodec.encodings
     encoding_param = "byte_order"
     group_label = "message"
-    case_folders = {"cases": "vector"}
+    case_folders = {"cases": "vector", "scenarios": "scenario"}
     packaged = IMC
 
     def __init__(self, folder: Path, defs: Definitions):
@@ -69,7 +71,12 @@ class ImcSuite(DataSuite):
 
     @cached_property
     def kinds(self) -> dict:
-        return {"vector": VectorKind(ImcCodec(self.defs, frozenset(r["id"] for r in self.rules)))}
+        return {"vector": VectorKind(ImcCodec(self.defs, frozenset(r["id"] for r in self.rules))),
+                "scenario": ScenarioKind(self.wire, self.behaviour)}
+
+    @cached_property
+    def wire(self) -> ImcWire:
+        return ImcWire(self.defs, {r["id"]: r["clause"] for r in self.rules})
 
     @property
     def adapters(self) -> dict[str, BuiltinAdapter]:
@@ -85,14 +92,16 @@ class ImcSuite(DataSuite):
         }
 
     def schema(self, kind: str) -> Path:
-        return VECTORS / "schema" / "vectors.schema.json"
+        return VECTORS / "schema" / ("scenarios.schema.json" if kind == "scenario" else "vectors.schema.json")
 
     def group_of(self, doc: dict) -> str:
         return doc["message"]["abbrev"]
 
     def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
         """The first problem of the case's message against the definitions (a decoded form needs its whole
-        header)."""
+        header); for a scenario, of its steps against the definitions and the exchange rules."""
+        if kind == "scenario":
+            return scenario_problem(self, case)
         if "message" not in case:
             return None
         expects = {case["expect"]} if isinstance(case["expect"], str) else set(case["expect"].values())
@@ -103,6 +112,22 @@ class ImcSuite(DataSuite):
     def generate(self, check: bool) -> int:
         from .corpus.build import main
         return main(["--check"] if check else [])
+
+    def commands(self, subparsers) -> None:
+        from .node.serve import add_command
+        add_command(subparsers, lambda: self)
+
+    def open_target(self, target: str, **settings):
+        from .live import open_target
+        return open_target(self, target, **settings)
+
+
+def scenario_problem(suite: ImcSuite, case: dict) -> tuple[str, str] | None:
+    """The first step of a scenario that names a message, field or value the definitions lack, a parameter,
+    effect or service the exchanges file does not, or a step it does not have (as JSON path suffix, problem)."""
+    from ...kinds.scenario.lint import lint_scenario
+    return lint_scenario(case, suite.wire, suite.behaviour, suite.editions,
+                         lambda m: m in suite.defs.by_abbrev, lambda m: [f.abbrev for f in suite.defs[m].fields])
 
 
 def shim_argv(script: str) -> list[str]:

@@ -1,0 +1,29 @@
+"""What a scenario would send, without sending it (``run --dry-run``)."""
+
+from __future__ import annotations
+
+import itertools
+
+from .machine import Program
+from .values import Scope, Unresolved, resolve_message
+from .wire import Addressing
+
+
+def planned_sends(program: Program, addressing: Addressing, epoch: float) -> list[tuple[str, dict | str]]:
+    """(step id, the wire's description of what it sends, or why it cannot be built yet) for each send step."""
+    counter = itertools.count(1000)
+    scope = Scope(dict(program.params), lambda _name: next(counter), epoch,
+                  addresses={"system": addressing.system, "node": addressing.node})
+    out = []
+    for step in program.scenario["steps"]:
+        if "send" not in step:
+            continue
+        try:
+            message = resolve_message(step["send"], scope, program.wire, program.edition)
+            composed = program.wire.compose(message, step.get("encoding"), addressing, epoch)
+        except (Unresolved, ValueError) as exc:
+            out.append((step["id"], f"cannot be built before the run: {exc}"))
+            continue
+        scope.sent[step["id"]] = composed.decoded.get("fields", {})
+        out.append((step["id"], program.wire.present(composed)))
+    return out

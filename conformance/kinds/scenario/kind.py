@@ -1,0 +1,144 @@
+"""Sans-IO planning and judging of scenarios: behaviour over a live link, as a case kind of the core.
+
+``admit`` declines scenarios whose effects the run does not allow; ``plan`` turns a scenario into one request the session runs (a ``Program``), or into a verdict
+reached without the target: INCONCLUSIVE when a parameter it needs is not given or the profile says it
+does not apply, UNSUPPORTED when the target does not claim its service. ``judge`` turns what the machine
+found into checks: a failed MUST is FAIL, a failed SHOULD is NON_STRICT (failing under --strict).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+
+from ...core.cases import expectation
+from ...core.results import CheckResult, Judgement
+from ...core.session import Answer, Request
+from ...core.verdicts import Verdict
+from .machine import Program
+
+ANSWER_VERDICTS = {"crash": Verdict.CRASH, "timeout": Verdict.TIMEOUT, "adapter-error": Verdict.ADAPTER_ERROR,
+                   "unsupported": Verdict.UNSUPPORTED, "inconclusive": Verdict.INCONCLUSIVE}
+
+
+class ScenarioKind:
+    """Scenarios of one suite: its wire, its exchange rules and the vocabulary of its parameters, effects and
+    services (``behaviour``: the suite's exchanges file)."""
+
+    name = "scenario"
+
+    def __init__(self, wire, behaviour: dict):
+        self.wire, self.behaviour = wire, behaviour
+        self.exchanges = tuple(behaviour["exchanges"])
+
+    # ------------------------------------------------------------ the run's options, checked
+
+    def parameters(self, items: list[str]) -> dict:
+        """``NAME=VALUE`` items as the run's parameters, typed; ValueError for an unknown or malformed one."""
+        known, out = self.behaviour["params"], {}
+        for item in items:
+            name, sep, value = item.partition("=")
+            if not sep or name not in known:
+                raise ValueError(f"--param {item!r}: expected NAME=VALUE with NAME one of {', '.join(known) or 'none'}")
+            if known[name]["type"] == "integer":
+                try:
+                    out[name] = int(value, 0)
+                except ValueError:
+                    raise ValueError(f"--param {item!r}: {name} is an integer (e.g. {known[name]['example']})") from None
+            else:
+                out[name] = value
+        return out
+
+    def effects(self, text: str | None) -> set[str]:
+        """The effects ``--allow-effects`` allows: none by default, ``all``, or a comma-separated list."""
+        if text is None:
+            return set()
+        names = {n.strip() for n in text.split(",") if n.strip()}
+        unknown = names - set(self.behaviour["effects"]) - {"all"}
+        if unknown or not names:
+            raise ValueError(f"--allow-effects {text!r}: expected all or a comma-separated list of "
+                             f"{', '.join(self.behaviour['effects'])}")
+        return names
+
+    def claims(self, doc) -> set[str]:
+        """The services a claims document (``{"services": [...]}``) says the target implements."""
+        if not isinstance(doc, dict) or not isinstance(doc.get("services"), list) or set(doc) - {"services", "description"}:
+            raise ValueError('expected {"services": [NAME, ...]} (optionally with "description")')
+        unknown = [s for s in doc["services"] if s not in self.behaviour["services"]]
+        if unknown:
+            raise ValueError(f"unknown service {str(unknown[0])[:40]!r} (services: {', '.join(self.behaviour['services'])})")
+        return set(doc["services"])
+
+    # ------------------------------------------------------------ planning and judging
+
+    def admit(self, case: dict, options: dict) -> str | None:
+        allowed = options.get("effects", set())
+        barred = [e for e in case.get("effects", ()) if e not in allowed and "all" not in allowed]
+        if barred:
+            return f"effects not allowed: {', '.join(barred)}; --allow-effects {','.join(barred)} runs them"
+        return None
+
+    def plan(self, case: dict, edition: str, emits: set[str], options: dict | None = None) -> list[Request]:
+        options = options or {}
+        if expectation(case, edition) is None:
+            return []
+        params = options.get("params", {})
+        missing = [p for p in case.get("needs", ()) if p not in params]
+        if missing:
+            why = "; ".join(f"--param {p}=... ({self.behaviour['params'][p]['description']})" for p in missing)
+            return [skip("INCONCLUSIVE", f"not run: needs {why}")]
+        claims = options.get("claims")
+        service = case.get("service")
+        if claims is not None and service is not None and service not in claims:
+            return [skip("UNSUPPORTED", f"not run: the target does not claim the service {service!r}")]
+        for rule in (options.get("profile") or {}).get("rules", ()):
+            if "not_applicable" in rule and any(fnmatch.fnmatchcase(case["id"], g) for g in rule["scenarios"]):
+                return [skip("INCONCLUSIVE", f"not applicable under the profile: {rule['not_applicable']} "
+                                             f"({rule['citation']})")]
+        program = Program(case["id"], case, self.exchanges, self.wire, edition, dict(params),
+                          float(options.get("time_scale", 1.0)))
+        return [Request("scenario", "scenario", params={"program": program, "profile": options.get("profile")})]
+
+    def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult | Judgement:
+        if request.op == "skip":
+            return CheckResult("scenario", Verdict(request.params["verdict"]), request.params["reason"])
+        if answer.kind != "ok":
+            return CheckResult("scenario", ANSWER_VERDICTS.get(answer.kind, Verdict.ADAPTER_ERROR),
+                               answer.reason or answer.kind)
+        record = answer.message
+        if record.get("error"):
+            return Judgement([CheckResult("scenario", Verdict.INCONCLUSIVE, record["error"])], record["timeline"])
+        relaxed = relaxations(request.params.get("profile") or {}, case["id"])
+        checks = []
+        for f in record["findings"]:
+            level = "SHOULD" if f["check"] in relaxed and ":" in f["check"][5:] else f["level"]
+            verdict = Verdict.PASS if f["passed"] else (Verdict.FAIL if level == "MUST" else Verdict.NON_STRICT)
+            detail = f["detail"] if f["passed"] else f"{level}: {f['detail']}"
+            checks.append(CheckResult(f["check"], verdict, detail, clause=f["clause"]))
+        if not checks:
+            checks.append(CheckResult("scenario", Verdict.INCONCLUSIVE, "no step was judged"))
+        for frame in record["frames"]:
+            ok = frame["problem"] is None
+            checks.append(CheckResult(
+                f"bytes-{frame['n']}", Verdict.PASS if ok else Verdict.FAIL,
+                f"{frame['message'] or 'a frame'} received at {frame['t']} s is well formed" if ok else
+                f"{frame['message'] or 'a frame'} received at {frame['t']} s is malformed: {frame['problem']}",
+                clause=frame["clause"] or case["clause"], filed_under=frame["message"] or self.reply_of(case)))
+        return Judgement(checks, record["timeline"])
+
+    def reply_of(self, case: dict) -> str:
+        """The message a scenario waits for first (where a malformed frame that names none is filed)."""
+        for step in case["steps"]:
+            for kind in ("expect", "sequence", "silence", "alive"):
+                if isinstance(step.get(kind), str):
+                    return step[kind]
+        return case["steps"][0]["send"]["abbrev"]
+
+
+def skip(verdict: str, reason: str) -> Request:
+    return Request("scenario", "skip", params={"verdict": verdict, "reason": reason})
+
+
+def relaxations(profile: dict, case_id: str) -> set[str]:
+    """Checks the profile makes SHOULD for this scenario (never the arrival of a reply itself)."""
+    return {c for rule in profile.get("rules", ()) if "relax" in rule
+            and any(fnmatch.fnmatchcase(case_id, g) for g in rule["scenarios"]) for c in rule["relax"]}

@@ -1,0 +1,87 @@
+"""Static checks of a scenario against the suite's definitions and exchanges file, when the corpus is read:
+a mistake in a scenario is a corpus error (exit 2), never a verdict on the implementation."""
+
+from __future__ import annotations
+
+from .machine import Program
+from .matchers import is_matcher
+from .values import Scope, Unresolved, resolve_matcher, resolve_message
+from .wire import Addressing
+
+WAITS = ("expect", "sequence", "silence", "alive")
+
+
+def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of) -> tuple[str, str] | None:
+    """(JSON path suffix, problem) for the first problem of ``case``, or None. ``known(message)``: whether the
+    suite has the message; ``fields_of(message)``: its field names."""
+    for key, vocabulary in (("needs", "params"), ("effects", "effects")):
+        for i, name in enumerate(case.get(key, ())):
+            if name not in behaviour[vocabulary]:
+                return f".{key}[{i}]", f"{name!r} is not one of the {vocabulary} of exchanges.json"
+    if "service" in case and case["service"] not in behaviour["services"]:
+        return ".service", f"{case['service']!r} is not one of the services of exchanges.json"
+    expect = case["expect"]
+    applies = [e for e in editions if isinstance(expect, str) or e in expect]
+    unknown = set(expect) - set(editions) if isinstance(expect, dict) else set()
+    if unknown:
+        return ".expect", f"unknown edition {sorted(unknown)[0]!r}"
+    for edition in applies:
+        problem = _lint_steps(case, wire, behaviour, edition, known, fields_of)
+        if problem:
+            return problem
+    return None
+
+
+def _lint_steps(case, wire, behaviour, edition, known, fields_of):
+    examples = {name: int(p["example"], 0) if p["type"] == "integer" else p["example"]
+                for name, p in behaviour["params"].items()}
+    scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2})
+    program = Program(case["id"], case, tuple(behaviour["exchanges"]), wire, edition, examples)
+    seen, sends = set(), {}
+    for i, step in enumerate(case["steps"]):
+        where = f".steps[{i}]"
+        if step["id"] in seen:
+            return where + ".id", f"the step id {step['id']!r} appears twice"
+        seen.add(step["id"])
+        if "send" in step:
+            message = step["send"]
+            if not known(message["abbrev"]):
+                return where + ".send.abbrev", f"unknown message {message['abbrev']!r}"
+            try:
+                resolved = resolve_message(message, scope, wire, edition)
+                composed = wire.compose(resolved, step.get("encoding"), Addressing(1, 1, 2), 0.0)
+            except (Unresolved, KeyError, ValueError) as exc:
+                return where + ".send", f"cannot be sent in {edition}: {exc}"
+            scope.sent[step["id"]] = composed.decoded.get("fields", {})
+            sends[step["id"]] = resolved
+            continue
+        kind = next((k for k in WAITS if k in step), None)
+        if kind is None:
+            continue
+        message = step[kind]
+        if message is not None and not known(message):
+            return f"{where}.{kind}", f"unknown message {message!r}"
+        ref = step.get("reply_to")
+        if ref is not None:
+            if ref not in sends:
+                return where + ".reply_to", f"{ref!r} is not an earlier send step"
+            exchange = program.exchange_for(sends[ref])
+            if exchange is None:
+                return where + ".reply_to", f"no exchange of exchanges.json opens with what step {ref!r} sends"
+            if exchange["reply"] != message:
+                return f"{where}.{kind}", f"step {ref!r} opens the exchange {exchange['id']!r}, answered by {exchange['reply']}"
+            if kind == "sequence" and "state" not in exchange:
+                return where, f"the exchange {exchange['id']!r} has no states for a sequence"
+        elif kind == "sequence":
+            return where, "a sequence needs reply_to"
+        for key in ("fields", "terminal"):
+            for name, spec in step.get(key, {}).items():
+                if name not in fields_of(message):
+                    return f"{where}.{key}.{name}", f"{message} has no field {name!r}"
+                try:
+                    resolve_matcher(spec, message, name, scope, wire, edition)
+                except (Unresolved, KeyError) as exc:
+                    return f"{where}.{key}.{name}", f"{exc}"
+                if is_matcher(spec) and "one_of" in spec and not resolve_matcher(spec, message, name, scope, wire, edition)["one_of"]:
+                    return f"{where}.{key}.{name}", f"no value of one_of exists in {edition}"
+    return None

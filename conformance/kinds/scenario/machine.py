@@ -1,0 +1,480 @@
+"""One scenario as a sans-IO state machine: events in (something received at t, time passed), data out
+(what to send), findings and a timeline kept. No clock, no socket: the caller says what time it is.
+
+Steps (each names its ``id``, ``level`` MUST or SHOULD, and ``clause``):
+``send`` a message; ``expect`` a message within a bound (a reply to an earlier send, correlated by the
+exchange rules, resent after the bound if the exchange is idempotent; or any such message, ``count`` of
+them); ``sequence``: replies passing through progress states to exactly one terminal state, then
+nothing more for a quiet period; ``silence``: no such message for a while; ``alive``: the node still
+sends something; ``wait``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+from .matchers import mismatch, same, show
+from .values import Scope, Unresolved, resolve_matcher, resolve_message
+from .wire import Addressing, Composed, Parsed, Wire
+
+STEP_KINDS = ("send", "expect", "sequence", "silence", "alive", "wait")
+
+
+@dataclass(frozen=True)
+class Program:
+    """Everything one scenario needs to run, as the scenario kind plans it: the case, the exchange rules,
+    the suite's wire, the edition, the run's parameters and its time scale."""
+
+    case_id: str
+    scenario: dict
+    exchanges: tuple
+    wire: Wire
+    edition: str
+    params: dict
+    time_scale: float = 1.0
+
+    def resources(self) -> set[str]:
+        """What it must not share with a scenario running at the same time: its declared resources and the
+        messages it waits for (so no two scenarios wait for the same message at once)."""
+        return set(self.scenario.get("resources", ())) | self.watched()
+
+    def watched(self) -> set[str]:
+        return {s[kind] for s in self.scenario["steps"] for kind in ("expect", "sequence", "silence", "alive")
+                if isinstance(s.get(kind), str)}
+
+    def exchange_for(self, message: dict) -> dict | None:
+        """The exchange a sent message (values resolved) opens, if any."""
+        for ex in self.exchanges:
+            request = ex["request"]
+            if request["message"] != message["abbrev"]:
+                continue
+            if all(message["fields"].get(f) in [self.wire.resolve(message["abbrev"], f, v, self.edition)
+                                                 for v in values if self._known(message["abbrev"], f, v)]
+                   for f, values in request.get("when", {}).items()):
+                return ex
+        return None
+
+    def _known(self, message: str, path: str, value) -> bool:
+        try:
+            self.wire.resolve(message, path, value, self.edition)
+            return True
+        except KeyError:
+            return False
+
+
+@dataclass
+class Finding:
+    """One expectation of one step: ``check`` is ``step:<id>`` or ``step:<id>:<what>``."""
+
+    check: str
+    passed: bool
+    level: str
+    clause: str
+    detail: str
+
+
+@dataclass
+class Frame:
+    """A frame the node sent that this scenario looked at, for the byte-level (passive) checks."""
+
+    n: int
+    message: str | None
+    problem: str | None
+    clause: str | None
+    t: float
+
+
+@dataclass
+class _Step:
+    spec: dict
+    kind: str
+    until: float | None = None
+    tries: int = 1
+    replies: list = field(default_factory=list)
+    malformed: int = 0
+    terminal: Parsed | None = None
+    failures: dict = field(default_factory=dict)  # check -> first detail
+    seen: list = field(default_factory=list)  # data already received, to tell duplicates
+
+
+class Machine:
+    def __init__(self, program: Program, addressing: Addressing, unique):
+        self.program, self.addressing = program, addressing
+        self.scope = Scope(dict(program.params), unique,
+                           addresses={"system": addressing.system, "node": addressing.node})
+        self.wire, self.edition = program.wire, program.edition
+        self.findings: list[Finding] = []
+        self.timeline: list[dict] = []
+        self.frames: list[Frame] = []
+        self.sent: dict[str, Composed] = {}
+        self.keys: list[tuple] = []  # (reply message, ((field, value), ...)) its requests gave replies to echo
+        self.keys_seen = 0  # how many of keys the conductor has registered
+        self.backlog: list[Parsed] = []  # replies to a request a later step awaits
+        self.t0 = 0.0
+        self.index = -1
+        self.step: _Step | None = None
+        self.done = False
+        self.error: str | None = None  # why the scenario could not run at all (a parameter, a name)
+
+    def record(self) -> dict:
+        """What the scenario found, as the session hands it to the kind's judge."""
+        return {"findings": [asdict(f) for f in self.findings], "timeline": self.timeline,
+                "frames": [asdict(f) for f in self.frames], "error": self.error}
+
+    # ------------------------------------------------------------------ events
+
+    def start(self, t: float, epoch: float) -> list[Composed]:
+        self.t0 = t
+        return self._advance(t, epoch)
+
+    @property
+    def deadline(self) -> float | None:
+        return None if self.done or self.step is None else self.step.until
+
+    def watches(self, parsed: Parsed) -> bool:
+        return parsed.message in self.program.watched()
+
+    def deliver(self, t: float, epoch: float, parsed: Parsed, adopt: bool = False) -> list[Composed]:
+        """Something arrived; ``adopt``: keep it for the byte-level checks even if no step waits for it."""
+        if self.done:
+            return []
+        if self.watches(parsed) or adopt or parsed.problem:
+            self.frames.append(Frame(len(self.frames) + 1, parsed.message, parsed.problem, parsed.clause, self._rel(t)))
+        owner = self._answered_step(parsed)
+        if owner is not None and owner != (self.step.spec.get("reply_to") if self.step else None):
+            later = owner in [s.get("reply_to") for s in self.program.scenario["steps"][self.index + 1:]]
+            if later:
+                self.backlog.append(parsed)
+            self._log(t, "held" if later else "ignored", parsed,
+                      f"a reply to the request of step {owner}" + (", kept for the step that awaits it" if later else ", too late"))
+            return []
+        return self._take(t, epoch, parsed)
+
+    def _take(self, t: float, epoch: float, parsed: Parsed) -> list[Composed]:
+        step = self.step
+        if step is None or not self._candidate(step, parsed):
+            if self.watches(parsed) or parsed.problem:
+                self._log(t, "ignored", parsed, "not awaited by the current step" if not parsed.problem
+                          else f"malformed: {parsed.problem}")
+            return []
+        if parsed.decoded is None:
+            step.malformed += 1
+            self._log(t, "received", parsed, f"malformed: {parsed.problem}")
+            return []
+        if any(parsed.data == d for d in step.seen):
+            self._log(t, "duplicate", parsed, "a byte-identical copy of an earlier datagram (tolerated)")
+            return []
+        step.seen.append(parsed.data)
+        getattr(self, "_on_" + step.kind)(t, step, parsed)
+        return self._advance(t, epoch) if self._finished(t, step) else []
+
+    def wake(self, t: float, epoch: float) -> list[Composed]:
+        step = self.step
+        if self.done or step is None or step.until is None or t < step.until:
+            return []
+        if step.kind == "expect" and not step.replies and step.tries < self._max_tries(step):
+            step.tries += 1
+            step.until = t + self._bound(step.spec["within"])
+            request = self.sent[step.spec["reply_to"]]
+            self.timeline.append({"t": self._rel(t), "event": "resent", "step": step.spec["id"],
+                                  **self.wire.present(request), "note": f"try {step.tries}: no answer within the bound"})
+            return [request]
+        self._expire(t, step)
+        return self._advance(t, epoch)
+
+    # ------------------------------------------------------------------ stepping
+
+    def _advance(self, t: float, epoch: float) -> list[Composed]:
+        out: list[Composed] = []
+        while not self.done:
+            if self.step is not None and self._must_failed():
+                self._stop(t, "a MUST step failed; the rest of the scenario was not run")
+                break
+            self.index += 1
+            steps = self.program.scenario["steps"]
+            if self.index >= len(steps):
+                self.done, self.step = True, None
+                break
+            spec = steps[self.index]
+            kind = next(k for k in STEP_KINDS if k in spec)
+            self.step = _Step(spec, kind)
+            if kind == "send":
+                try:
+                    out.append(self._send(t, epoch, spec))
+                except Unresolved as exc:
+                    self.error = str(exc)
+                    self._stop(t, str(exc))
+                continue
+            bound = spec.get("within", spec.get("for", spec.get("wait")))
+            self.step.until = t + self._bound(bound)
+            held = [p for p in self.backlog if self._answered_step(p) == spec.get("reply_to")]
+            if held:
+                self.backlog = [p for p in self.backlog if p not in held]
+                for parsed in held:
+                    out += self._take(t, epoch, parsed)
+            break
+        return out
+
+    def _answered_step(self, parsed: Parsed) -> str | None:
+        """The send step whose request this reply echoes (by the exchange's echo fields), if any."""
+        if parsed.decoded is None:
+            return None
+        for step_id, composed in self.sent.items():
+            exchange = self.program.exchange_for({"abbrev": composed.message, "fields": composed.decoded["fields"]})
+            echoes = [r for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo"]
+            if exchange and echoes and exchange["reply"] == parsed.message and all(
+                    same(parsed.fields.get(r["reply_field"]), composed.decoded["fields"].get(r["request_field"]))
+                    for r in echoes):
+                return step_id
+        return None
+
+    def _send(self, t: float, epoch: float, spec: dict) -> Composed:
+        self.scope.epoch = epoch
+        message = resolve_message(spec["send"], self.scope, self.wire, self.edition)
+        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, epoch)
+        self.sent[spec["id"]] = composed
+        self.scope.sent[spec["id"]] = composed.decoded.get("fields", {})
+        exchange = self.program.exchange_for(message)
+        echoes = tuple((r["reply_field"], _hashable(message["fields"][r["request_field"]]))
+                       for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo")
+        if echoes:
+            self.keys.append((exchange["reply"], echoes))
+        self.timeline.append({"t": self._rel(t), "event": "sent", "step": spec["id"], **self.wire.present(composed)})
+        return composed
+
+    def _finished(self, t: float, step: _Step) -> bool:
+        if step.kind == "expect":
+            return len(step.replies) >= step.spec.get("count", 1) or bool(step.failures)
+        if step.kind == "alive":
+            return bool(step.replies)
+        return False  # sequence, silence and wait end at their deadline
+
+    def _must_failed(self) -> bool:
+        return any(not f.passed and f.level == "MUST" for f in self.findings)
+
+    def _stop(self, t: float, why: str) -> None:
+        self.timeline.append({"t": self._rel(t), "event": "stopped", "note": why})
+        self.done, self.step = True, None
+
+    # ------------------------------------------------------------------ reading replies
+
+    def _candidate(self, step: _Step, parsed: Parsed) -> bool:
+        spec = step.spec
+        if step.kind == "alive":
+            wanted = spec["alive"]
+            if parsed.decoded is None or (wanted and parsed.message != wanted):
+                return False
+            origin = self.wire.origin(parsed)
+            return origin is None or self.addressing.node is None or origin[0] == self.addressing.node
+        wanted = spec.get(step.kind) if step.kind != "wait" else None
+        if not isinstance(wanted, str) or parsed.message != wanted:
+            return False
+        exchange = self._exchange(step)
+        if exchange is None or parsed.decoded is None or "reply_when" not in exchange:
+            return True
+        return all(any(same(parsed.fields.get(f), self.wire.resolve(wanted, f, v, self.edition))
+                       for v in values if self.program._known(wanted, f, v))
+                   for f, values in exchange["reply_when"].items())
+
+    def _exchange(self, step: _Step) -> dict | None:
+        ref = step.spec.get("reply_to")
+        if ref is None:
+            return None
+        sent = self.sent[ref]
+        return self.program.exchange_for({"abbrev": sent.message, "fields": sent.decoded.get("fields", {})})
+
+    def _correlate(self, step: _Step, parsed: Parsed) -> list[tuple[str, str, str, str | None]]:
+        """(check, level, clause, failure or None) for each correlation rule of the step's exchange."""
+        exchange = self._exchange(step)
+        if exchange is None:
+            return []
+        request = self.sent[step.spec["reply_to"]].decoded.get("fields", {})
+        out = []
+        for rule in exchange["correlation"]:
+            kind = rule["kind"]
+            if kind == "echo":
+                name = f"echo-{rule['reply_field']}"
+                want, got = request.get(rule["request_field"]), parsed.fields.get(rule["reply_field"])
+                bad = None if same(got, want) else f"{rule['reply_field']} is {show(got)}, the request's {rule['request_field']} was {show(want)}"
+            elif kind == "to-requester":
+                name = kind
+                to, me = self.wire.destination(parsed), (self.addressing.system, self.addressing.entity)
+                bad = None if to is None or tuple(to) == me else f"addressed to {_address(to)}, the requester is {_address(me)}"
+            else:
+                name = kind
+                origin = self.wire.origin(parsed)
+                node = self.addressing.node
+                bad = None if origin is None or node is None or origin[0] == node else f"sent by system {origin[0]}, the node is {node}"
+            out.append((name, rule["level"], rule["clause"], bad))
+        return out
+
+    def _match_fields(self, message: str, matchers: dict, parsed: Parsed) -> str | None:
+        problems = []
+        for path, spec in matchers.items():
+            try:
+                resolved = resolve_matcher(spec, message, path, self.scope, self.wire, self.edition)
+            except Unresolved as exc:
+                problems.append(f"{path}: {exc}")
+                continue
+            why = mismatch(parsed.fields.get(path), resolved)
+            if why:
+                problems.append(f"{path} {why}")
+        return "; ".join(problems) or None
+
+    def _on_expect(self, t: float, step: _Step, parsed: Parsed) -> None:
+        spec = step.spec
+        step.replies.append(parsed)
+        self._log(t, "received", parsed, "matched")
+        if len(step.replies) < spec.get("count", 1):
+            return
+        tries = f" (answered on try {step.tries})" if step.tries > 1 else ""
+        self._find(step, "", True, f"{spec['expect']} received after {self._rel(t) - self._started(step):.3f} s{tries}")
+        for name, level, clause, bad in self._correlate(step, parsed):
+            self._find(step, name, bad is None, bad or "as required", level, clause)
+        if spec.get("fields"):
+            bad = self._match_fields(spec["expect"], spec["fields"], parsed)
+            self._find(step, "fields", bad is None, bad or "fields as expected")
+
+    def _on_sequence(self, t: float, step: _Step, parsed: Parsed) -> None:
+        spec = step.spec
+        exchange = self._exchange(step) or {}
+        states = exchange.get("state", {})
+        value = parsed.fields.get(states.get("field"))
+        name = self._state_name(spec["sequence"], states.get("field"), value)
+        step.replies.append(parsed)
+        for check, level, clause, bad in self._correlate(step, parsed):
+            _note(step, (check, level, clause), bad)
+        if spec.get("fields"):
+            _note(step, ("fields", spec.get("level", "MUST"), None), self._match_fields(spec["sequence"], spec["fields"], parsed))
+        if step.terminal is not None:
+            _note(step, ("after-terminal", "MUST", states.get("clause")),
+                  f"{name} after the terminal state {self._terminal_name(step)}")
+            self._log(t, "received", parsed, f"{name}: after the terminal state")
+            return
+        terminal = [self._resolve_state(spec["sequence"], states, s) for s in states.get("terminal", ())]
+        progress = [self._resolve_state(spec["sequence"], states, s) for s in states.get("progress", ())]
+        if any(same(value, s) for s in terminal):
+            step.terminal = parsed
+            step.until = t + self._bound(spec.get("quiet", 1.0))
+            self._log(t, "received", parsed, f"{name}: terminal state")
+        elif any(same(value, s) for s in progress):
+            self._log(t, "received", parsed, f"{name}: progress state")
+        else:
+            _note(step, ("states", "MUST", states.get("clause")),
+                  f"{name} is neither a progress nor a terminal state of {spec['sequence']}")
+            self._log(t, "received", parsed, f"{name}: not a state of this exchange")
+
+    def _on_silence(self, t: float, step: _Step, parsed: Parsed) -> None:
+        step.replies.append(parsed)
+        self._log(t, "received", parsed, "breaks the expected silence")
+
+    def _on_alive(self, t: float, step: _Step, parsed: Parsed) -> None:
+        step.replies.append(parsed)
+        self._log(t, "received", parsed, "the node is alive")
+        self._find(step, "", True, f"{parsed.message} received after {self._rel(t) - self._started(step):.3f} s")
+
+    def _expire(self, t: float, step: _Step) -> None:
+        """The step's time is up: judge what it gathered."""
+        spec, kind = step.spec, step.kind
+        bound = spec.get("within", spec.get("for", spec.get("wait")))
+        if kind == "wait":
+            pass
+        elif kind == "silence":
+            got = len(step.replies)
+            self._find(step, "", got == 0, f"nothing for {bound} s" if not got else f"{got} {spec['silence']} received")
+        elif kind == "sequence":
+            self._judge_sequence(step, bound)
+        else:
+            wanted = spec.get("expect") or spec.get("alive") or "a frame"
+            got = len(step.replies)
+            what = f"{got} of {spec.get('count', 1)} {wanted}" if got else f"no {wanted}"
+            tries = f" ({step.tries} tries)" if step.tries > 1 else ""
+            malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
+            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}")
+        self.timeline.append({"t": self._rel(t), "event": "timer", "step": spec["id"], "note": "the step's time is up"})
+
+    def _judge_sequence(self, step: _Step, bound) -> None:
+        spec = step.spec
+        if not step.replies:
+            malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
+            self._find(step, "", False, f"no {spec['sequence']} within {bound} s{malformed}")
+            return
+        self._find(step, "", True, f"{len(step.replies)} {spec['sequence']} received")
+        states = (self._exchange(step) or {}).get("state", {})
+        for (check, level, clause), bad in step.failures.items():
+            if check not in ("after-terminal", "states"):
+                self._find(step, check, bad is None, bad or "as required", level, clause)
+        trail = " -> ".join(self._state_name(spec["sequence"], states.get("field"), r.fields.get(states.get("field")))
+                            for r in step.replies)
+        clause = states.get("clause")
+        if step.terminal is None:
+            self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})", "MUST", clause)
+        else:
+            bad = self._match_fields(spec["sequence"], spec.get("terminal", {}), step.terminal)
+            self._find(step, "terminal", bad is None, bad or f"ended in {self._terminal_name(step)} ({trail})",
+                       step.spec.get("level", "MUST"), clause)
+        for check in ("states", "after-terminal"):
+            key = (check, "MUST", clause)
+            if key in step.failures or check == "after-terminal" and step.terminal is not None:
+                bad = step.failures.get(key)
+                ok = "nothing after the terminal state" if check == "after-terminal" else "every state known"
+                self._find(step, check, bad is None, bad or ok, "MUST", clause)
+
+    # ------------------------------------------------------------------ helpers
+
+    def _find(self, step: _Step, what: str, passed: bool, detail: str, level: str | None = None,
+              clause: str | None = None) -> None:
+        spec = step.spec
+        check = f"step:{spec['id']}" + (f":{what}" if what else "")
+        self.findings.append(Finding(check, passed, level or spec.get("level", "MUST"),
+                                     clause or spec.get("clause") or self.program.scenario["clause"], detail))
+
+    def _bound(self, seconds) -> float:
+        return float(seconds) * self.program.time_scale
+
+    def _max_tries(self, step: _Step) -> int:
+        exchange = self._exchange(step)
+        return step.spec.get("tries", 3) if exchange is not None and exchange.get("idempotent") else 1
+
+    def _started(self, step: _Step) -> float:
+        return self._rel(step.until) - self._bound(step.spec.get("within", 0)) if step.until is not None else 0.0
+
+    def _rel(self, t: float) -> float:
+        return round(t - self.t0, 3)
+
+    def _log(self, t: float, event: str, parsed: Parsed, note: str) -> None:
+        entry = {"t": self._rel(t), "event": event, **self.wire.present(parsed), "note": note}
+        if self.step is not None:
+            entry["step"] = self.step.spec["id"]
+        self.timeline.append(entry)
+
+    def _resolve_state(self, message: str, states: dict, name):
+        try:
+            return self.wire.resolve(message, states["field"], name, self.edition)
+        except KeyError:
+            return None  # a state this edition does not have
+
+    def _state_name(self, message: str, path: str | None, value) -> str:
+        if path is None:
+            return message
+        named = self.wire.present(Parsed(None, message, {"fields": {path: value}}))
+        return f"{path}={named.get('fields', {}).get(path, value)}"
+
+    def _terminal_name(self, step: _Step) -> str:
+        states = (self._exchange(step) or {}).get("state", {})
+        return self._state_name(step.spec["sequence"], states.get("field"), step.terminal.fields.get(states.get("field")))
+
+
+def _note(step: _Step, key: tuple, bad: str | None) -> None:
+    """Keep the first failure of a check over all the replies of a sequence (None: passed so far)."""
+    if step.failures.get(key) is None:
+        step.failures[key] = bad
+
+
+def _hashable(value):
+    return tuple(value) if isinstance(value, list) else value
+
+
+def _address(pair) -> str:
+    system, entity = pair
+    return f"{system}/{entity}"

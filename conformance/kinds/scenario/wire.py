@@ -1,0 +1,73 @@
+"""What a suite gives the scenario engine: how to build what a step sends and read what comes back.
+
+The engine is generic: it never looks inside a frame. A suite's ``Wire`` composes a step's message (with
+the run's addressing) into the bytes (or call) to send, parses what arrives into a ``Parsed``, resolves
+the names a scenario uses for values (enumerations), and tells who sent a reply and to whom.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+
+@dataclass(frozen=True)
+class Addressing:
+    """Who talks: the session (``system``, and one ``entity`` per scenario, so replies can be told apart) and
+    the node (``node``; None until learned). Suites without addresses leave them None."""
+
+    system: int | None = None
+    entity: int | None = None
+    node: int | None = None
+
+
+@dataclass(frozen=True)
+class Parsed:
+    """One thing received. ``message``: its message name when known, even from a malformed frame's header;
+    ``decoded``: its decoded form (``fields``, and ``header`` where the protocol has one) if well formed;
+    ``problem`` and ``clause``: why it is malformed and the rule it breaks."""
+
+    data: object
+    message: str | None
+    decoded: dict | None = None
+    problem: str | None = None
+    clause: str | None = None
+    encoding: str | None = None
+
+    @property
+    def fields(self) -> dict:
+        return (self.decoded or {}).get("fields", {})
+
+
+@dataclass(frozen=True)
+class Composed:
+    """What a send step sends (``data``) and its decoded form, for the timeline and for later references."""
+
+    data: object
+    decoded: dict
+    message: str
+    encoding: str | None = None
+    extra: dict = field(default_factory=dict)
+
+
+class Wire(Protocol):
+    def compose(self, message: dict, encoding: str | None, addressing: Addressing, epoch: float) -> Composed:
+        """The message (decoded form, values resolved) as sent by the session at ``epoch`` (seconds since
+        1970); raises ValueError if it cannot be built."""
+
+    def parse(self, data) -> Parsed:
+        """What arrived, parsed."""
+
+    def resolve(self, message: str, path: str, value, edition: str):
+        """``value`` for field ``path`` of ``message`` with names (enumeration values) turned into what the
+        wire carries; raises KeyError for a name the edition lacks."""
+
+    def origin(self, parsed: Parsed) -> tuple | None:
+        """(system, entity) that sent it, or None where the protocol has no addresses."""
+
+    def destination(self, parsed: Parsed) -> tuple | None:
+        """(system, entity) it is addressed to, or None."""
+
+    def present(self, parsed: Parsed | Composed) -> dict:
+        """A timeline entry's description of it: ``message``, ``header``, ``fields`` (names for numbers where
+        the definitions give them), ``bytes``."""

@@ -1,0 +1,109 @@
+"""A session that runs scenarios against a live target over datagrams: the I/O loop around the sans-IO
+scenario conductor and the suite's manners on the link (e.g. IMC's announce and heartbeat).
+
+The transport does the I/O and owns the clock: real UDP on a monotonic clock, or an in-memory link on
+virtual time (tests, benchmark). Nothing here knows a protocol: the suite's ``Peer`` says what the session
+sends on its own and when the target has shown itself, its ``Wire`` parses what arrives.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Iterator, Protocol
+
+from ..core.session import Answer, Job
+from ..kinds.scenario import Addressing, Conductor
+
+
+class Transport(Protocol):
+    def now(self) -> float: ...
+
+    def epoch(self, t: float) -> float:
+        """Seconds since 1970 at clock time t."""
+
+    def send(self, data: bytes, address=None) -> None:
+        """To the target (``address`` None) or to another port of its host (discovery)."""
+
+    def receive(self, until: float) -> tuple[float, bytes] | None:
+        """The next datagram from the target's host and when it arrived, or None once ``until`` has passed."""
+
+    def close(self) -> None: ...
+
+
+class Peer(Protocol):
+    system: int | None  # the session's own id on the link
+    node: int | None  # the target's id, given or learned
+    ready: bool  # the target has shown itself (or was given)
+
+    @property
+    def deadline(self) -> float | None: ...
+
+    def start(self, t: float) -> list[tuple[object, bytes]]: ...
+
+    def due(self, t: float) -> list[tuple[object, bytes]]: ...
+
+    def observe(self, t: float, parsed) -> None: ...
+
+
+class DatagramSession:
+    incidents: tuple = ()
+    stderr = ""
+
+    def __init__(self, transport: Transport, peer: Peer, wire, hello: dict, startup: float):
+        """``startup``: seconds to wait for the target to show itself before every scenario is INCONCLUSIVE."""
+        self.transport, self.peer, self.wire, self._hello, self.startup = transport, peer, wire, hello, startup
+        self.name = hello["implementation"]
+
+    def hello(self) -> dict:
+        return self._hello
+
+    def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
+        jobs = list(jobs)
+        if not jobs:
+            return
+        t = self.transport.now()
+        self._send(self.peer.start(t))
+        bound = t + self.startup
+        while not self.peer.ready and t < bound:
+            self._step(min(bound, self.peer.deadline or bound), None)
+            t = self.transport.now()
+        if not self.peer.ready:
+            why = (f"inconclusive: no valid frame from {self.name} within {self.startup:g} s (is it running, and does "
+                   "it answer peers that announce themselves? --dst starts at once)")
+            for job in jobs:
+                yield job, Answer("inconclusive", reason=why)
+            return
+        conductor = Conductor(jobs, lambda job: job.request.params["program"],
+                              Addressing(self.peer.system, None, self.peer.node), self.transport.epoch)
+        self._transmit(conductor.start(self.transport.now()))
+        while True:
+            while conductor.finished:
+                job, machine = conductor.finished.pop(0)
+                yield job, Answer("ok", message=machine.record())
+            if conductor.done:
+                return
+            deadline = min((x for x in (conductor.deadline, self.peer.deadline) if x is not None),
+                           default=self.transport.now())
+            self._step(deadline, conductor)
+
+    def _step(self, until: float, conductor: Conductor | None) -> None:
+        got = self.transport.receive(until)
+        t = self.transport.now()
+        if got is not None:
+            parsed = self.wire.parse(got[1])
+            self.peer.observe(got[0], parsed)
+            if conductor is not None:
+                self._transmit(conductor.deliver(got[0], parsed))
+        if conductor is not None:
+            self._transmit(conductor.wake(t))
+        self._send(self.peer.due(t))
+
+    def _transmit(self, outgoing) -> None:
+        for item in outgoing:
+            self.transport.send(item.composed.data)
+
+    def _send(self, datagrams) -> None:
+        for address, data in datagrams:
+            self.transport.send(data, address)
+
+    def close(self) -> None:
+        self.transport.close()

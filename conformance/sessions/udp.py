@@ -1,0 +1,113 @@
+"""UDP for live targets: parsing a target URL, refusing group addresses, and a bounded, timestamped transport.
+
+Safety first: a run talks to one unicast host. Multicast and broadcast targets and binds are refused unless
+explicitly allowed, because real IMC nodes (DUNE, imcpy actors) listen on 224.0.75.69 and a test run must
+never reach a real vehicle by accident. Datagrams from any other host than the target's are dropped.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import select
+import socket
+import time
+import urllib.parse
+
+MAX_DATAGRAM = 65535
+SCHEMES = ("udp", "imc+udp")
+
+
+def parse_endpoint(text: str, what: str, default_port: int | None = None) -> tuple[str, int]:
+    """``udp://HOST:PORT`` or ``imc+udp://HOST:PORT/`` (IPv6 as ``[::1]``), or ``HOST:PORT`` for a bind;
+    ValueError with a one-line reason."""
+    raw = text if "://" in text else f"udp://{text}"
+    try:
+        url = urllib.parse.urlsplit(raw)
+        host, port = url.hostname, url.port
+    except ValueError as exc:
+        raise ValueError(f"{what} {text!r}: {exc}") from None
+    if url.scheme not in SCHEMES:
+        raise ValueError(f"{what} {text!r}: the scheme must be one of {', '.join(s + '://' for s in SCHEMES)}")
+    if not host:
+        raise ValueError(f"{what} {text!r}: no host (expected e.g. udp://127.0.0.1:6002)")
+    if url.path not in ("", "/") or url.query or url.fragment or url.username or url.password:
+        raise ValueError(f"{what} {text!r}: expected only a host and a port")
+    port = port if port is not None else default_port
+    if port is None:
+        raise ValueError(f"{what} {text!r}: no port (expected e.g. udp://127.0.0.1:6002)")
+    return host, port
+
+
+def resolve(host: str, port: int, what: str) -> tuple[int, tuple]:
+    """(address family, socket address) of a host given by name or number; ValueError if it does not resolve."""
+    try:
+        info = socket.getaddrinfo(host, port, type=socket.SOCK_DGRAM)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise ValueError(f"{what} {host!r} does not resolve: {exc}") from None
+    family, _, _, _, address = info[0]
+    return family, address
+
+
+def group_address(host: str) -> str | None:
+    """Why ``host`` (a numeric address) is not a unicast address, or None."""
+    try:
+        ip = ipaddress.ip_address(host.split("%")[0])
+    except ValueError:
+        return None
+    if ip.is_multicast:
+        return "a multicast address"
+    if ip.version == 4 and (ip == ipaddress.IPv4Address("255.255.255.255") or str(ip).endswith(".255")):
+        return "a broadcast address"
+    if ip.is_unspecified:
+        return "the unspecified address"
+    return None
+
+
+class UdpTransport:
+    """One socket, bound to ``bind``, talking to ``target``; every wait bounded, every read at most one datagram
+    of at most 65,535 bytes, each timestamped on the monotonic clock on arrival."""
+
+    def __init__(self, target: tuple, bind: tuple, family: int):
+        self.target, self.family = target, family
+        self.sock = socket.socket(family, socket.SOCK_DGRAM)
+        try:
+            self.sock.bind(bind)
+        except OSError as exc:
+            self.sock.close()
+            raise ValueError(f"cannot bind {bind[0]}:{bind[1]}: {exc.strerror or exc}") from None
+        self.sock.setblocking(False)
+        self.address = self.sock.getsockname()
+        self.offset = time.time() - time.monotonic()
+        self.dropped = 0  # datagrams from other hosts
+
+    def now(self) -> float:
+        return time.monotonic()
+
+    def epoch(self, t: float) -> float:
+        return self.offset + t
+
+    def send(self, data: bytes, address=None) -> None:
+        try:
+            self.sock.sendto(data, self.target if address is None else address)
+        except OSError:
+            pass  # an unreachable port (ICMP) or a full buffer: the scenario's bounds judge the silence
+
+    def receive(self, until: float) -> tuple[float, bytes] | None:
+        while True:
+            wait = until - time.monotonic()
+            if wait <= 0:
+                return None
+            ready, _, _ = select.select([self.sock], [], [], wait)
+            if not ready:
+                return None
+            try:
+                data, source = self.sock.recvfrom(MAX_DATAGRAM)
+            except OSError:
+                continue  # e.g. ICMP port unreachable reported on the socket
+            if source[0] != self.target[0]:
+                self.dropped += 1
+                continue
+            return time.monotonic(), data
+
+    def close(self) -> None:
+        self.sock.close()

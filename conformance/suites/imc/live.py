@@ -1,0 +1,33 @@
+"""A live IMC node as a session: UDP to the target, with the manners of an IMC peer."""
+
+from __future__ import annotations
+
+from ...sessions.datagram import DatagramSession
+from ...sessions.udp import UdpTransport, group_address, parse_endpoint, resolve
+from .peer import DEFAULT_SYSTEM, ImcPeer
+
+
+def open_target(suite, target: str, *, bind: str | None = None, src: int | None = None, dst: int | None = None,
+                allow_group: bool = False, startup: float = 10.0) -> DatagramSession:
+    """The session for ``target`` (``udp://HOST:PORT``, ``imc+udp://HOST:PORT/``); ValueError with a one-line
+    reason for a malformed URL, a group address, a host that does not resolve or a bind that fails."""
+    host, port = parse_endpoint(target, "--target")
+    family, address = resolve(host, port, "--target")
+    for what, text, ip in (("--target", target, address[0]),):
+        why = group_address(ip)
+        if why and not allow_group:
+            raise ValueError(f"{what} {text}: {why}; a run talks to one node (--allow-multicast overrides)")
+    loopback = "::1" if ":" in address[0] else "127.0.0.1"
+    bind_host, bind_port = parse_endpoint(bind, "--bind", default_port=0) if bind else (loopback, 0)
+    _, bind_address = resolve(bind_host, bind_port, "--bind")
+    why = group_address(bind_address[0])
+    if why and not allow_group:
+        raise ValueError(f"--bind {bind}: {why} (--allow-multicast overrides)")
+    transport = UdpTransport(address, bind_address, family)
+    own_host, own_port = transport.address[:2]
+    shown = f"[{own_host}]" if ":" in own_host else own_host
+    peer = ImcPeer(suite.defs, system=DEFAULT_SYSTEM if src is None else src, node=dst,
+                   service=f"imc+udp://{shown}:{own_port}/", host=address[0], epoch=transport.epoch)
+    hello = {"implementation": f"IMC node at {target}", "suites": [suite.name], "byte_orders": list(suite.encodings),
+             "kinds": ["scenario"]}
+    return DatagramSession(transport, peer, suite.wire, hello, startup)

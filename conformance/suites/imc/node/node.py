@@ -1,0 +1,306 @@
+"""The reference node: what the seeds say a node does, sans-IO (the caller says what time it is and moves the
+datagrams). It behaves like DUNE where the seeds are silent: it talks only to systems that announced an
+``imc+udp`` service, heart-beats to them at 1 Hz and announces itself to them (unicast only) every 10 s.
+
+Acoustic operations go over a simulated channel: each peer has a range, a reply takes the two-way travel
+time at 1500 m/s, and the modem is busy until the operation ends. Iridium and SMS go to fake gateways that
+always deliver. ``loss`` and ``dup`` drop and repeat datagrams with a seeded generator; loss touches only
+the requests and replies of idempotent exchanges (exchanges.json), which a scenario may resend.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import random
+import re
+import struct
+
+from .. import codec
+from ..crc16 import crc16
+from ..definitions import Definitions
+from ..wire import ImcWire
+from .breaks import BREAKS
+
+SOUND_SPEED = 1500.0  # m/s
+TURNAROUND = 0.05  # s a peer's modem takes to answer
+PROCESSING = 0.005  # s the node takes to answer anything
+UNKNOWN_SYSTEM, UNKNOWN_ENTITY = 0xFFFF, 0xFF
+ACOUSTIC_ENTITY = 43
+SERVICE_URL = re.compile(r"imc\+udp://([^:/;]+|\[[0-9a-fA-F:]+\]):([0-9]+)/?")
+
+
+class ReferenceNode:
+    def __init__(self, defs: Definitions, behaviour: dict, *, edition: str, address: tuple[str, int],
+                 name: str = "imc-reference", system: int = 0x00A0, peers: dict[str, float] | None = None,
+                 loss: float = 0.0, dup: float = 0.0, seed: int = 0, broken: str | None = None,
+                 epoch0: float = 1_700_000_000.0):
+        if broken is not None and broken not in BREAKS:
+            raise ValueError(f"unknown broken behaviour {broken!r}; one of: {', '.join(BREAKS)}")
+        self.defs, self.wire, self.edition = defs, ImcWire(defs, {}), edition
+        self.exchanges = behaviour["exchanges"]
+        self.address, self.name, self.system = address, name, system
+        self.peers = dict(peers if peers is not None else {"imc-peer-1": 150.0, "imc-peer-2": 1200.0})
+        self.loss, self.dup, self.rng, self.broken, self.epoch0 = loss, dup, random.Random(seed), broken, epoch0
+        self.queue: list = []
+        self.order = itertools.count()
+        self.contacts: dict[int, tuple[str, int]] = {}
+        self.modem_free_at = 0.0
+        self.beacons: list = []
+        self.kept: list[dict] = []  # RemoteCommands kept for resending
+        self.acoustic_dead = False
+        self.next_beat = self.next_announce = None
+
+    # ------------------------------------------------------------------ the caller's interface
+
+    @property
+    def deadline(self) -> float | None:
+        times = [self.queue[0][0]] if self.queue else []
+        times += [x for x in (self.next_beat, self.next_announce) if x is not None]
+        return min(times, default=None)
+
+    def receive(self, t: float, data: bytes, source: tuple) -> None:
+        """A datagram arrived from ``source`` (malformed ones are dropped silently, as DUNE does)."""
+        try:
+            message = codec.decode(self.defs, data)
+        except ValueError:
+            return
+        order = codec.byte_order_of(data)
+        if self.broken == "ignores-big-endian" and order == "be":
+            return
+        src = message["header"]["src"]
+        if message["abbrev"] == "Announce":
+            self._contact(t, src, message["fields"]["services"], source)
+            return
+        if src not in self.contacts or self._lost(message):
+            return
+        handler = getattr(self, "_on_" + message["abbrev"], None)
+        if handler is not None:
+            handler(t, message)
+
+    def due(self, t: float) -> list[tuple[tuple, bytes]]:
+        """The datagrams to send by time ``t``: (destination address, bytes)."""
+        out = []
+        if self.next_beat is not None and self.next_beat <= t:
+            self.next_beat = t + 1.0
+            if self.broken != "no-heartbeat":
+                out += [(addr, self._frame(t, "Heartbeat", {}, dst=UNKNOWN_SYSTEM, ent=0)) for addr in self.contacts.values()]
+        if self.next_announce is not None and self.next_announce <= t:
+            self.next_announce = t + 10.0
+            out += [(addr, self._announce(t)) for addr in self.contacts.values()]
+        while self.queue and self.queue[0][0] <= t:
+            _, _, dest, data = heapq.heappop(self.queue)
+            out.append((dest, data))
+        return out
+
+    # ------------------------------------------------------------------ discovery
+
+    def _contact(self, t: float, src: int, services: str, source: tuple) -> None:
+        for host, port in SERVICE_URL.findall(services):
+            address = (host.strip("[]"), int(port))
+            fresh = src not in self.contacts
+            self.contacts[src] = address
+            if fresh:
+                self._later(t, PROCESSING, address, self._announce(t))
+                self.next_beat = t if self.next_beat is None else self.next_beat
+                self.next_announce = t + 10.0 if self.next_announce is None else self.next_announce
+            return
+
+    def _announce(self, t: float) -> bytes:
+        host, port = self.address
+        host = f"[{host}]" if ":" in host else host
+        services = f"imc+udp://{host}:{port}/;imc+info://0.0.0.0/version/{self.edition.removeprefix('imc-')}"
+        fields = {"sys_name": self.name, "sys_type": 2, "owner": UNKNOWN_SYSTEM, "lat": 0.0, "lon": 0.0,
+                  "height": 0.0, "services": services}
+        return self._frame(t, "Announce", fields, dst=0, ent=0, dst_ent=0)
+
+    # ------------------------------------------------------------------ requests
+
+    def _on_AcousticSystemsQuery(self, t: float, message: dict) -> None:
+        self._reply(t, PROCESSING, message, "AcousticSystems", {"list": ",".join(self.peers)})
+
+    def _on_LblConfig(self, t: float, message: dict) -> None:
+        op = message["fields"]["op"]
+        if op == self._v("LblConfig", "op", "SET_CFG"):
+            self.beacons = list(message["fields"]["beacons"])
+        elif op == self._v("LblConfig", "op", "GET_CFG") and self.broken != "no-cur-cfg":
+            beacons = self.beacons[:-1] if self.broken == "other-beacons" else self.beacons
+            self._reply(t, PROCESSING, message, "LblConfig", {"op": self._v("LblConfig", "op", "CUR_CFG"), "beacons": beacons})
+
+    def _on_AcousticOperation(self, t: float, message: dict) -> None:
+        if self.acoustic_dead:
+            return
+        f = message["fields"]
+        op = self._name("AcousticOperation", "op", f["op"])
+        plans = {"RANGE": ("RANGE_IP", "RANGE_RECVED", "RANGE_TIMEOUT"), "REVERSE_RANGE": ("RANGE_IP", "RANGE_RECVED", "RANGE_TIMEOUT"),
+                 "MSG": ("MSG_IP", "MSG_DONE", "MSG_FAILURE"), "MSG_SHORT": ("MSG_IP", "MSG_DONE", "MSG_FAILURE"),
+                 "ABORT": ("ABORT_IP", "ABORT_ACKED", "ABORT_TIMEOUT")}
+        if op not in plans:
+            return  # a state, not a request
+        system = "imc-other-system" if self.broken == "wrong-system" else f["system"]
+
+        def state(delay: float, name: str, range_: float = 0.0) -> None:
+            fields = {"op": self._v("AcousticOperation", "op", name), "system": system, "range": range_, "msg": None}
+            self._reply(t, delay, message, "AcousticOperation", fields, entity=ACOUSTIC_ENTITY)
+
+        if t < self.modem_free_at:
+            state(PROCESSING, "BUSY")
+            return
+        progress, success, failure = plans[op]
+        if self.broken == "wrong-kind-terminal" and op == "RANGE":
+            success = "MSG_DONE"
+        distance = self.peers.get(f["system"])
+        travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + TURNAROUND
+        self.modem_free_at = t + travel
+        state(PROCESSING, progress)
+        if distance is None:
+            state(travel, failure)
+        else:
+            state(travel, success, float(distance) if "RANGE" in op else 0.0)
+
+    def _on_AcousticRequest(self, t: float, message: dict) -> None:
+        if self.acoustic_dead:
+            return
+        f = message["fields"]
+        kind = self._name("AcousticStatus", "type", f["type"])
+        if self.broken == "dies-after-raw" and kind == "RAW":
+            self.acoustic_dead = True
+            return
+        echoed_type = self._v("AcousticStatus", "type", "MSG") if self.broken == "type-not-echoed" else f["type"]
+        req_id = (f["req_id"] + 1) % 0x10000 if self.broken == "req-id-not-echoed" else f["req_id"]
+
+        def status(delay: float, name: str, range_: float = 0.0, info: str = "") -> None:
+            fields = {"req_id": req_id, "type": echoed_type, "status": self._status(name), "info": info, "range": range_}
+            self._reply(t, delay, message, "AcousticStatus", fields, entity=ACOUSTIC_ENTITY)
+
+        if t < self.modem_free_at:
+            status(PROCESSING, "BUSY", info="the modem is busy")
+            return
+        distance = self.peers.get(f["destination"])
+        if kind == "RAW" and (f["msg"] is None or f["msg"]["abbrev"] != "DevDataBinary") and self.broken != "raw-accepted":
+            status(PROCESSING, "UNSUPPORTED", info="RAW expects a DevDataBinary")
+            return
+        if kind == "MSG" and f["msg"] is None:
+            status(PROCESSING, "INPUT_FAILURE", info="no message to send")
+            return
+        if distance is None:
+            status(PROCESSING, "INV_ADDR", info="unknown destination")
+            return
+        travel = 2 * distance / SOUND_SPEED + TURNAROUND
+        self.modem_free_at = t + travel
+        status(PROCESSING, "IN_PROGRESS")
+        if self.broken == "no-terminal":
+            return
+        final = "RANGE_RECEIVED" if "RANGE" in kind else "SENT"
+        status(travel, final, float(distance) if final == "RANGE_RECEIVED" else 0.0)
+        if self.broken == "status-after-terminal":
+            status(travel + 0.1, "IN_PROGRESS")
+        elif self.broken == "two-terminals":
+            status(travel + 0.1, "ERROR", info="second final status")
+
+    def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
+        req_id = message["fields"]["req_id"]
+        req_id = (req_id + 1) % 0x10000 if self.broken == "req-id-not-echoed" else req_id
+        for delay, name in ((PROCESSING, "QUEUED"), (0.2, "TRANSMIT"), (0.5, "OK")):
+            fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": ""}
+            self._reply(t, delay, message, "IridiumTxStatus", fields)
+
+    def _on_SmsTx(self, t: float, message: dict) -> None:
+        seq = message["fields"]["seq"]
+        seq = (seq + 1) % 0x100000000 if self.broken == "seq-not-echoed" else seq
+        for delay, name in ((PROCESSING, "ACCEPTED"), (0.2, "TRANSMITTING"), (0.5, "COMPLETED")):
+            self._reply(t, delay, message, "SmsState", {"seq": seq, "state": self._v("SmsState", "state", name), "error": ""})
+
+    def _on_HistoricDataQuery(self, t: float, message: dict) -> None:
+        f = message["fields"]
+        req_id = (f["req_id"] + 1) % 0x10000 if self.broken == "req-id-not-echoed" else f["req_id"]
+        kind = self._name("HistoricDataQuery", "type", f["type"])
+        if kind == "CLEAR":
+            self.kept.clear()
+            fields = {"req_id": req_id, "type": f["type"], "max_size": f["max_size"], "data": None}
+        elif kind == "QUERY":
+            data = None
+            if self.kept:
+                data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0,
+                                                              "data": list(self.kept)}}
+            fields = {"req_id": req_id, "type": self._v("HistoricDataQuery", "type", "REPLY"), "max_size": f["max_size"], "data": data}
+        else:
+            return
+        self._reply(t, PROCESSING, message, "HistoricDataQuery", fields)
+
+    def _on_RemoteCommand(self, t: float, message: dict) -> None:
+        f = message["fields"]
+        if f["destination"] == self.system:
+            return  # for this node: the seeds name no command it must execute
+        if f["timeout"] > self.epoch0 + t or self.broken == "keeps-expired-commands":
+            self.kept.append({"abbrev": "RemoteCommand", "fields": f})
+
+    # ------------------------------------------------------------------ sending
+
+    def _reply(self, t: float, delay: float, request: dict, abbrev: str, fields: dict, entity: int = 0) -> None:
+        header = request["header"]
+        address = self.contacts.get(header["src"])
+        if address is None:
+            return
+        dst, dst_ent = (UNKNOWN_SYSTEM, UNKNOWN_ENTITY) if self.broken == "broadcast-replies" else (header["src"], header["src_ent"])
+        if self.broken == "late":
+            delay += 30.0
+        frame = self._frame(t + delay, abbrev, fields, dst=dst, ent=entity, dst_ent=dst_ent)
+        if self._lost({"abbrev": abbrev, "fields": fields}, reply=True):
+            return
+        self._later(t, delay, address, frame)
+        if self.dup and self.rng.random() < self.dup:
+            self._later(t, delay + 0.001, address, frame)
+
+    def _later(self, t: float, delay: float, address: tuple, frame: bytes) -> None:
+        heapq.heappush(self.queue, (t + delay, next(self.order), address, frame))
+
+    def _frame(self, t: float, abbrev: str, fields: dict, *, dst: int, ent: int, dst_ent: int = UNKNOWN_ENTITY) -> bytes:
+        src = 0x0BAD if self.broken == "from-other-system" and abbrev not in ("Heartbeat", "Announce") else self.system
+        header = {"timestamp": self.epoch0 + t, "src": src, "src_ent": ent, "dst": dst, "dst_ent": dst_ent}
+        message = {"abbrev": abbrev, "header": header, "fields": fields}
+        if self.broken == "big-endian-le-crc" and abbrev not in ("Heartbeat", "Announce"):
+            frame = codec.encode(self.defs, message, "be")
+            return frame[:-2] + struct.pack("<H", crc16(frame[:-2]))
+        frame = codec.encode(self.defs, message, "le")
+        if self.broken == "malformed-reply" and abbrev == "AcousticSystems":
+            size = struct.unpack_from("<H", frame, 4)[0] + 4
+            body = frame[:4] + struct.pack("<H", size) + frame[6:-2]
+            return body + struct.pack("<H", crc16(body))
+        return frame
+
+    # ------------------------------------------------------------------ helpers
+
+    def _lost(self, message: dict, reply: bool = False) -> bool:
+        """Drop at random (``loss``) a request or reply of an idempotent exchange."""
+        if not self.loss or not self._idempotent(message, reply):
+            return False
+        return self.rng.random() < self.loss
+
+    def _idempotent(self, message: dict, reply: bool) -> bool:
+        for ex in self.exchanges:
+            name, when = (ex["reply"], ex.get("reply_when", {})) if reply else (ex["request"]["message"], ex["request"].get("when", {}))
+            if name == message["abbrev"] and all(message["fields"].get(f) in [self._v(name, f, v) for v in values]
+                                                 for f, values in when.items()):
+                return ex["idempotent"]
+        return False
+
+    def _v(self, message: str, path: str, name: str):
+        try:
+            return self.wire.resolve(message, path, name, self.edition)
+        except KeyError:
+            return None
+
+    def _status(self, name: str) -> int:
+        """AcousticStatus.status by name; the seeds' edition lacks UNSUPPORTED (666 fits no uint8, E1) and
+        INV_ADDR: INPUT_FAILURE and ERROR stand in."""
+        value = self._v("AcousticStatus", "status", name)
+        if value is None or value > 0xFF:
+            value = self._v("AcousticStatus", "status", {"UNSUPPORTED": "INPUT_FAILURE", "INV_ADDR": "ERROR"}[name])
+        return value
+
+    def _name(self, message: str, path: str, value: int) -> str | None:
+        for v in self.defs[message].field(path).enum_values:
+            if v.value == value and v.in_edition(self.edition):
+                return v.abbrev
+        return None

@@ -1,0 +1,125 @@
+"""``imc-conformance serve``: the reference node (or a broken one) on a UDP socket, until interrupted."""
+
+from __future__ import annotations
+
+import select
+import socket
+import sys
+import time
+
+from ....sessions.udp import MAX_DATAGRAM, group_address, resolve
+from .breaks import BREAKS
+from .node import ReferenceNode
+
+
+def add_command(sub, suite_loader) -> None:
+    serve = sub.add_parser("serve", help="run the reference IMC node (or a broken one) on loopback UDP",
+                           description="A simulated IMC node implementing the seeds' behaviour, with a simulated "
+                                       "acoustic channel and fake Iridium/SMS gateways. It answers only systems that "
+                                       "announce an imc+udp service to it, and announces by unicast only.")
+    serve.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    serve.add_argument("--port", type=int, default=6002, help="UDP port (default 6002, DUNE's)")
+    serve.add_argument("--system", default="imc-reference/0x00A0", metavar="NAME/ID",
+                       help="the node's name and IMC id (default imc-reference/0x00A0)")
+    serve.add_argument("--peer", action="append", default=[], metavar="NAME[:METRES]",
+                       help="a system on the simulated acoustic channel and its range (repeatable; default "
+                            "imc-peer-1:150 and imc-peer-2:1200)")
+    serve.add_argument("--edition", help="the IMC edition it speaks (default: the suite's first)")
+    serve.add_argument("--loss", type=probability, default=0.0, help="drop this share of idempotent requests and replies")
+    serve.add_argument("--dup", type=probability, default=0.0, help="send this share of replies twice")
+    serve.add_argument("--seed", type=int, default=0, help="seed of the loss and duplication (default 0)")
+    serve.add_argument("--break", dest="broken", choices=sorted(BREAKS), metavar="NAME",
+                       help="break one rule: " + "; ".join(f"{k}: {v}" for k, v in BREAKS.items()))
+    serve.set_defaults(func=lambda args: command_serve(args, suite_loader()))
+
+
+def probability(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0.0 <= value < 1.0:
+        import argparse
+        raise argparse.ArgumentTypeError(f"{text!r}: give a share between 0 and 1")
+    return value
+
+
+def parse_system(text: str) -> tuple[str, int]:
+    name, sep, number = text.rpartition("/")
+    try:
+        system = int(number, 0)
+    except ValueError:
+        raise ValueError(f"--system {text!r}: expected NAME/ID, e.g. imc-reference/0x00A0") from None
+    if not sep or not name or not 0 <= system < 0xFFFF:
+        raise ValueError(f"--system {text!r}: expected NAME/ID with an id below 0xFFFF")
+    return name, system
+
+
+def parse_peers(items: list[str]) -> dict[str, float] | None:
+    if not items:
+        return None
+    peers = {}
+    for item in items:
+        name, _, metres = item.partition(":")
+        try:
+            peers[name] = float(metres or 500.0)
+        except ValueError:
+            raise ValueError(f"--peer {item!r}: expected NAME[:METRES]") from None
+        if not name or "," in name or not 0 < peers[name] < 100_000:
+            raise ValueError(f"--peer {item!r}: a name without commas and a range in metres (0-100000)")
+    return peers
+
+
+def command_serve(args, suite) -> int:
+    from ....cli import UsageError
+
+    edition = args.edition or suite.editions[0]
+    if edition not in suite.editions:
+        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
+    try:
+        name, system = parse_system(args.system)
+        peers = parse_peers(args.peer)
+        family, address = resolve(args.host, args.port, "--host")
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    if group_address(address[0]):
+        raise UsageError(f"--host {args.host}: {group_address(address[0])}; the reference node listens on one address")
+    sock = socket.socket(family, socket.SOCK_DGRAM)
+    try:
+        sock.bind(address)
+    except OSError as exc:
+        sock.close()
+        raise UsageError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from exc
+    offset = time.time() - time.monotonic()
+    node = ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=sock.getsockname()[:2], name=name,
+                         system=system, peers=peers, loss=args.loss, dup=args.dup, seed=args.seed, broken=args.broken,
+                         epoch0=offset)
+    print(f"reference IMC node {name} (0x{system:04X}, {edition}) on udp://{args.host}:{sock.getsockname()[1]}"
+          + (f", broken: {args.broken}" if args.broken else "") + "; Ctrl-C stops it", file=sys.stderr, flush=True)
+    try:
+        serve_forever(sock, node)
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        sock.close()
+    return 0
+
+
+def serve_forever(sock, node: ReferenceNode) -> None:
+    while True:
+        deadline = node.deadline
+        wait = 1.0 if deadline is None else max(0.0, min(1.0, deadline - time.monotonic()))
+        ready, _, _ = select.select([sock], [], [], wait)
+        if ready:
+            try:
+                data, source = sock.recvfrom(MAX_DATAGRAM)
+            except OSError:
+                data = None
+            if data is not None:
+                node.receive(time.monotonic(), data, source[:2])
+        for destination, frame in node.due(time.monotonic()):
+            if group_address(destination[0]) is None:  # never to a group, whatever a contact announced
+                try:
+                    sock.sendto(frame, destination)
+                except OSError:
+                    pass

@@ -1,0 +1,66 @@
+"""How the session behaves on an IMC link, sans-IO: a well-mannered peer, because real nodes ignore
+unannounced sources (imc-wire.md, "IMC over UDP"). It announces its ``imc+udp://IP:PORT/`` service to the
+target and to the target host's discovery ports 30100-30104, heart-beats to the target at 1 Hz, learns the
+node's id from its first valid frame (unless given), and says the target is ready once a valid frame from
+it arrived (at once when its id is given: the seeds do not make Heartbeat periodic, erratum E7)."""
+
+from __future__ import annotations
+
+from .definitions import Definitions
+from . import codec
+
+DISCOVERY_PORTS = range(30100, 30105)
+DEFAULT_SYSTEM = 0x4CF0  # the session's IMC id unless --src: outside DUNE's and Neptus' usual ranges
+ANNOUNCE_EVERY, HEARTBEAT_EVERY = 10.0, 1.0
+
+
+class ImcPeer:
+    def __init__(self, defs: Definitions, *, system: int, node: int | None, service: str, host: str, epoch,
+                 name: str = "imc-conformance"):
+        """``service``: the session's own imc+udp URL; ``host``: the target's host (for discovery ports);
+        ``epoch(t)``: seconds since 1970 at clock time t."""
+        self.defs, self.system, self.node, self.service, self.host = defs, system, node, service, host
+        self.epoch, self.name = epoch, name
+        self.ready = node is not None
+        self.next_beat = self.next_announce = None
+
+    @property
+    def deadline(self) -> float | None:
+        return None if self.next_beat is None else min(self.next_beat, self.next_announce)
+
+    def start(self, t: float) -> list[tuple[object, bytes]]:
+        self.next_beat, self.next_announce = t + HEARTBEAT_EVERY, t + ANNOUNCE_EVERY
+        announce = self._announce(t)
+        return ([(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]
+                + [(None, self._heartbeat(t))])
+
+    def due(self, t: float) -> list[tuple[object, bytes]]:
+        out = []
+        if self.next_beat is not None and t >= self.next_beat:
+            self.next_beat = t + HEARTBEAT_EVERY
+            out.append((None, self._heartbeat(t)))
+        if self.next_announce is not None and t >= self.next_announce:
+            self.next_announce = t + ANNOUNCE_EVERY
+            out.append((None, self._announce(t)))
+        return out
+
+    def observe(self, t: float, parsed) -> None:
+        if parsed.decoded is None:
+            return
+        src = parsed.decoded["header"]["src"]
+        if self.node is None and src != self.system:
+            self.node = src
+        if src == self.node:
+            self.ready = True
+
+    def _announce(self, t: float) -> bytes:
+        fields = {"sys_name": self.name, "sys_type": 0, "owner": 0xFFFF, "lat": 0.0, "lon": 0.0, "height": 0.0,
+                  "services": self.service}
+        return self._frame(t, "Announce", fields, dst=0)
+
+    def _heartbeat(self, t: float) -> bytes:
+        return self._frame(t, "Heartbeat", {}, dst=0xFFFF if self.node is None else self.node)
+
+    def _frame(self, t: float, abbrev: str, fields: dict, dst: int) -> bytes:
+        header = {"timestamp": self.epoch(t), "src": self.system, "src_ent": 0, "dst": dst, "dst_ent": 0xFF}
+        return codec.encode(self.defs, {"abbrev": abbrev, "header": header, "fields": fields}, "le")

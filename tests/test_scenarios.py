@@ -1,0 +1,171 @@
+"""The scenario engine against the reference node and every broken node, on virtual time (no test here depends
+on wall-clock speed): the reference passes every scenario, each broken behaviour is caught by the scenario that
+checks its rule, with the right message named, and loss and duplication are absorbed deterministically."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.render import RENDERERS
+from imc_conformance.suites.imc.node import BREAKS
+from live_harness import EVERYTHING, PARAMS, run_virtual, scenario_cases
+
+# broken behaviour -> (a case that must catch it, its verdict): the case names the message the rule belongs to
+CAUGHT = {
+    "req-id-not-echoed": ("imc/AcousticRequest/scenario/range", "FAIL"),
+    "type-not-echoed": ("imc/AcousticRequest/scenario/range", "FAIL"),
+    "seq-not-echoed": ("imc/SmsTx/scenario/state", "FAIL"),
+    "wrong-system": ("imc/AcousticOperation/scenario/range", "FAIL"),
+    "status-after-terminal": ("imc/AcousticRequest/scenario/msg", "FAIL"),
+    "two-terminals": ("imc/AcousticRequest/scenario/msg", "FAIL"),
+    "no-terminal": ("imc/AcousticRequest/scenario/range", "FAIL"),
+    "wrong-kind-terminal": ("imc/AcousticOperation/scenario/range", "FAIL"),
+    "no-cur-cfg": ("imc/LblConfig/scenario/get-cfg", "FAIL"),
+    "other-beacons": ("imc/LblConfig/scenario/set-then-get", "FAIL"),
+    "ignores-big-endian": ("imc/AcousticSystemsQuery/scenario/reply-big-endian", "FAIL"),
+    "big-endian-le-crc": ("imc/AcousticStatus/passive/AcousticRequest/scenario/range", "FAIL"),
+    "late": ("imc/AcousticSystemsQuery/scenario/reply", "FAIL"),
+    "dies-after-raw": ("imc/AcousticRequest/scenario/msg-without-message", "FAIL"),
+    "malformed-reply": ("imc/AcousticSystems/passive/AcousticSystemsQuery/scenario/reply", "FAIL"),
+    "broadcast-replies": ("imc/AcousticRequest/scenario/range", "FAIL"),
+    "from-other-system": ("imc/AcousticSystemsQuery/scenario/reply", "FAIL"),
+    "raw-accepted": ("imc/AcousticRequest/scenario/raw-without-devdatabinary", "FAIL"),
+    "keeps-expired-commands": ("imc/RemoteCommand/scenario/expired-dropped", "FAIL"),
+    "no-heartbeat": ("imc/Heartbeat/scenario/periodic", "NON_STRICT"),
+}
+
+
+def verdicts(result) -> dict[str, str]:
+    return {c.id: c.verdict.value for c in result.cases}
+
+
+@pytest.mark.parametrize("edition", ["imc-5.4.30", "imc-5.4.11"])
+def test_the_reference_node_passes_every_scenario(suite, cases, edition):
+    result, _ = run_virtual(suite, cases, edition)
+    scenarios = [c for c in result.cases if "/passive/" not in c.id]
+    assert len(scenarios) == len(scenario_cases(cases)) >= 30
+    assert {c.id: c.detail for c in result.cases if c.verdict is not Verdict.PASS} == {}
+    assert result.exit_code() == 0
+    passive = [c for c in result.cases if "/passive/" in c.id]
+    assert passive and all(c.checks for c in passive)  # every frame a scenario looked at was judged by the bytes
+
+
+def test_every_broken_behaviour_has_a_catching_scenario():
+    assert set(CAUGHT) == set(BREAKS) and len(BREAKS) >= 14
+
+
+@pytest.mark.parametrize("broken", sorted(BREAKS))
+def test_each_broken_node_is_caught(suite, cases, broken):
+    case_id, verdict = CAUGHT[broken]
+    result, _ = run_virtual(suite, cases, broken=broken)
+    assert verdicts(result).get(case_id) == verdict, next((c.detail for c in result.cases if c.id == case_id), "absent")
+    case = next(c for c in result.cases if c.id == case_id)
+    group = case_id.split("/")[1]
+    message = next(m for m in result.messages if m.name == group)
+    assert case in message.cases  # filed under the message the rule belongs to
+    if verdict == "FAIL":
+        assert result.exit_code() == 1 and message.verdict == "FAIL"
+    else:  # a SHOULD: caught, failing only under --strict
+        assert result.exit_code() == 0
+        strict, _ = run_virtual(suite, cases, broken=broken, strict=True)
+        assert strict.exit_code() == 1
+
+
+def test_a_failing_scenario_keeps_its_timeline(suite, cases):
+    result, _ = run_virtual(suite, cases, broken="two-terminals")
+    case = next(c for c in result.cases if c.id == "imc/AcousticRequest/scenario/msg")
+    events = [(e["event"], e.get("note", "")) for e in case.timeline]
+    assert events[0][0] == "sent" and case.timeline[0]["bytes"].startswith("54fe")
+    assert any("after the terminal state" in note for _, note in events)
+    failed = [k for k in case.checks if k.verdict is Verdict.FAIL]
+    assert [k.check for k in failed] == ["step:status:after-terminal"] and failed[0].clause
+    for fmt, render in RENDERERS.items():
+        text = render(result)
+        assert "after the terminal state" in text or fmt == "json" and "after-terminal" in text
+
+
+@pytest.mark.parametrize("seed", range(1, 21))
+def test_loss_and_duplication_are_absorbed_and_reruns_are_identical(suite, cases, seed):
+    first, _ = run_virtual(suite, cases, loss=0.1, dup=0.05, seed=seed)
+    assert {c.id: c.detail for c in first.cases if c.verdict is not Verdict.PASS} == {}
+    again, _ = run_virtual(suite, cases, loss=0.1, dup=0.05, seed=seed)
+    assert json.dumps(first.to_dict(), sort_keys=True) == json.dumps(again.to_dict(), sort_keys=True)
+
+
+def test_resends_and_duplicates_are_reported(suite, cases):
+    notes = []
+    for seed in range(1, 21):
+        result, _ = run_virtual(suite, cases, loss=0.1, dup=0.05, seed=seed)
+        notes += [k.detail for c in result.cases for k in c.checks] + [e.get("note", "") for c in result.cases for e in c.timeline]
+    assert any("answered on try 2" in n for n in notes)
+    assert any("byte-identical copy" in n for n in notes)
+
+
+def test_a_missing_parameter_is_inconclusive_and_names_it(suite, cases):
+    result, _ = run_virtual(suite, cases, options={"params": {}, "effects": {"all"}})
+    case = next(c for c in result.cases if c.id == "imc/AcousticRequest/scenario/range")
+    assert case.verdict is Verdict.INCONCLUSIVE and "--param peer=" in case.detail
+    assert result.exit_code() == 0  # other scenarios were tested and pass
+    strict, _ = run_virtual(suite, cases, options={"params": {}, "effects": {"all"}}, strict=True)
+    assert strict.exit_code() == 1  # --strict makes INCONCLUSIVE failing
+
+
+def test_effects_are_opt_in_and_the_report_says_what_was_skipped(suite, cases):
+    result, _ = run_virtual(suite, cases, options={"params": PARAMS})
+    ran = {c.id for c in result.cases}
+    assert "imc/AcousticRequest/scenario/range" not in ran and "imc/AcousticSystemsQuery/scenario/reply" in ran
+    assert any("effects not allowed: transmits-acoustically" in n for n in result.notes)
+    some, _ = run_virtual(suite, cases, options={"params": PARAMS, "effects": {"changes-configuration"}})
+    assert "imc/LblConfig/scenario/set-then-get" in {c.id for c in some.cases}
+
+
+def test_unclaimed_services_are_unsupported_and_claimed_silence_fails(suite, cases):
+    options = dict(EVERYTHING, claims={"discovery", "lbl"})
+    result, _ = run_virtual(suite, cases, options=options)
+    by_id = {c.id: c for c in result.cases}
+    assert by_id["imc/SmsTx/scenario/state"].verdict is Verdict.UNSUPPORTED
+    assert by_id["imc/LblConfig/scenario/get-cfg"].verdict is Verdict.PASS
+    silent, _ = run_virtual(suite, cases, options=options, broken="no-cur-cfg")
+    assert {c.id: c.verdict for c in silent.cases}["imc/LblConfig/scenario/get-cfg"] is Verdict.FAIL
+
+
+def test_a_silent_target_makes_everything_inconclusive_and_exits_2(suite, cases):
+    class Silent:
+        deadline = None
+
+        def receive(self, t, data, source):
+            pass
+
+        def due(self, t):
+            return []
+
+    from live_harness import virtual_session
+    from imc_conformance.core.runner import run_cases
+
+    session, link = virtual_session(suite, suite.editions[0], node=Silent())
+    result = run_cases(session, suite, scenario_cases(cases), edition=suite.editions[0], adapter="virtual",
+                       options=EVERYTHING, clock=link.now)
+    assert {c.verdict for c in result.cases} == {Verdict.INCONCLUSIVE}
+    assert "no valid frame" in result.cases[0].detail and result.exit_code() == 2
+    assert {m.verdict for m in result.messages} == {"INCONCLUSIVE"}
+
+
+def test_the_session_announces_and_heartbeats_before_expecting_answers(suite, cases):
+    _, link = run_virtual(suite, cases)
+    names = [suite.wire.parse(d).message for d in link.sent[:8]]
+    assert names[0] == "Announce" and "Heartbeat" in names
+    assert sum(suite.wire.parse(d).message == "Heartbeat" for d in link.sent) >= 5  # 1 Hz over the run
+
+
+def test_the_profile_can_excuse_but_never_pass_silence(suite, cases):
+    profile = {"name": "lenient", "rules": [
+        {"scenarios": ["imc/LblConfig/scenario/get-cfg"], "relax": ["step:current", "step:current:fields"], "citation": "x"},
+        {"scenarios": ["imc/SmsTx/*"], "not_applicable": "no SMS here", "citation": "y"}]}
+    result, _ = run_virtual(suite, cases, options=dict(EVERYTHING, profile=profile), broken="no-cur-cfg")
+    by_id = {c.id: c for c in result.cases}
+    assert by_id["imc/LblConfig/scenario/get-cfg"].verdict is Verdict.FAIL  # the reply itself cannot be relaxed
+    assert by_id["imc/SmsTx/scenario/state"].verdict is Verdict.INCONCLUSIVE
+    assert "no SMS here (y)" in by_id["imc/SmsTx/scenario/state"].detail
