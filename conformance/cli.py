@@ -20,6 +20,7 @@ from .core.verdicts import failing
 from .core.waivers import WaiverError
 from .files import CorpusError
 from .render.common import printable
+from .live import system_id
 from .suites import names as suite_names
 
 REPORTS = ("json", "junit", "markdown", "html")
@@ -124,73 +125,14 @@ def selection(args):
 
 def command_list(args) -> int:
     suite, _, cases = selection(args)
-    if not args.scenarios:
-        for case in cases:
-            print(f"{case.id}\t{expectation(case.data, args.edition)}\t{case.data['clause']}")
-        return 0
-    kind = scenario_kind(suite)
-    for case in (c for c in cases if c.kind == kind.name):
-        d = case.data
-        print(f"{case.id}\tneeds: {','.join(d.get('needs', ())) or '-'}\teffects: {','.join(d.get('effects', ())) or '-'}"
-              f"\tservice: {d.get('service', '-')}\t{d['clause']}")
-    print("# parameters (--param NAME=VALUE):")
-    for name, p in kind.behaviour["params"].items():
-        print(f"#   {name}: {p['description']} ({p['type']}, e.g. {p['example']})")
-    print(f"# effects (--allow-effects all or a list): {', '.join(kind.behaviour['effects'])}")
-    print(f"# services (--claims FILE): {', '.join(kind.behaviour['services'])}")
-    return 0
-
-
-def scenario_kind(suite):
-    """The suite's scenario kind; a usage error if it has none."""
-    kind = next((k for k in suite.kinds.values() if hasattr(k, "parameters")), None)
-    if kind is None:
-        raise UsageError(f"the suite {suite.name!r} has no scenarios")
-    return kind
-
-
-def scenario_options(args, suite) -> dict:
-    """The run's settings for scenarios (--param, --allow-effects, --claims, --profile, --time-scale), checked."""
-    if not any(k for k in suite.kinds.values() if hasattr(k, "parameters")):
-        given = args.param or args.allow_effects or args.claims or args.profile or args.time_scale != 1.0 or args.target
-        if given:
-            raise UsageError(f"the suite {suite.name!r} has no scenarios: --target, --param, --allow-effects, --claims, "
-                             "--profile and --time-scale do not apply")
-        return {}
-    kind = scenario_kind(suite)
-    try:
-        options = {"params": kind.parameters(args.param), "effects": kind.effects(args.allow_effects),
-                   "time_scale": args.time_scale, "profile": suite.profile(args.profile or "seed")}
-    except ValueError as exc:
-        raise UsageError(str(exc)) from exc
-    if args.claims:
-        from .files import read_json
+    if args.scenarios:
+        from .live import list_live_cases
         try:
-            _, doc = read_json(Path(args.claims))
-            options["claims"] = kind.claims(doc)
+            return list_live_cases(suite, cases)
         except ValueError as exc:
-            raise UsageError(f"--claims {args.claims}: {exc}") from exc
-    return options
-
-
-def dry_run(suite, cases, args, options) -> int:
-    """Print what each selected scenario would send, and send nothing."""
-    from .kinds.scenario import Addressing
-    from .kinds.scenario.dryrun import planned_sends
-
-    kind = scenario_kind(suite)
-    addressing = Addressing(args.src, 0, args.dst)
+            raise UsageError(str(exc)) from exc
     for case in cases:
-        if case.kind != kind.name:
-            continue
-        why = kind.admit(case.data, options)
-        plans = [] if why else kind.plan(case.data, args.edition, set(suite.encodings), options)
-        if why or not plans or plans[0].op == "skip":
-            print(f"{case.id}: not run ({why or plans[0].params['reason'] if plans else 'not in this edition'})")
-            continue
-        for step, sent in planned_sends(plans[0].params["program"], addressing, 0.0):
-            text = sent if isinstance(sent, str) else json.dumps({k: v for k, v in sent.items() if k != "header"})
-            print(f"{case.id} {step}: {printable(text)}")
+        print(f"{case.id}\t{expectation(case.data, args.edition)}\t{case.data['clause']}")
     return 0
 
 
@@ -198,20 +140,24 @@ def command_run(args) -> int:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
+    from . import live
     from .core.runner import run_cases
     from .files import load_waivers
     from .render.terminal import print_result
 
     targets = report_targets(args)
     suite, everything, cases = selection(args)
-    options = scenario_options(args, suite)
+    try:
+        options = live.options(args, suite, everything)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
     if args.target and (args.adapter or args.adapter_cmd):
         raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd, not both")
     name, argv = (args.target, None) if args.target else adapter_choice(args, suite)
     if not cases:
         raise UsageError("the selection matches no case")
     if args.dry_run:
-        return dry_run(suite, cases, args, options)
+        return live.dry_run(suite, cases, args, options)
     waivers, notes = {}, []
     if args.waivers:
         try:
@@ -219,13 +165,16 @@ def command_run(args) -> int:
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
     console = terminal()
-    session = open_target(args, suite) if args.target else open_session(name, argv, args, suite)
+    try:
+        session = live.open_target(args, suite) if args.target else open_session(name, argv, args, suite)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
     try:
         with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       console=Console(stderr=True), transient=True, disable=args.no_progress) as bar:
             task = bar.add_task("running", total=None)
             result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
-                               waivers=waivers, strict=args.strict, notes=notes + option_notes(args, options),
+                               waivers=waivers, strict=args.strict, notes=notes + live.notes(args, options),
                                progress=lambda n: bar.update(task, completed=n), options=options)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
@@ -243,38 +192,6 @@ def command_run(args) -> int:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     return 2 if problems else result.exit_code()
-
-
-def open_target(args, suite):
-    try:
-        return suite.open_target(args.target, bind=args.bind, src=args.src, dst=args.dst,
-                                 allow_group=args.allow_multicast, startup=args.startup)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from exc
-
-
-def option_notes(args, options: dict) -> list[str]:
-    """What the report says the scenarios ran under (a run against a live target)."""
-    if not options or not args.target:
-        return []
-    notes = [f"profile: {options['profile']['name']}"]
-    if "claims" in options:
-        notes.append(f"claims ({args.claims}): {', '.join(sorted(options['claims'])) or 'no service'}")
-    if options["params"]:
-        notes.append("parameters: " + ", ".join(f"{k}={v}" for k, v in options["params"].items()))
-    if options["time_scale"] != 1.0:
-        notes.append(f"time bounds scaled by {options['time_scale']:g}")
-    return notes
-
-
-def system_id(text: str) -> int:
-    try:
-        value = int(text, 0)
-    except ValueError:
-        value = -1
-    if not 0 <= value < 0xFFFF:
-        raise argparse.ArgumentTypeError(f"{text!r}: an IMC id is 0 to 0xFFFE (decimal or 0x hex)")
-    return value
 
 
 def report_targets(args) -> dict[str, Path]:
@@ -407,29 +324,35 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids with a reason and optional expiry")
     run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
-    live = run.add_argument_group("scenarios and live targets")
-    live.add_argument("--target", metavar="URL", help="a live node to run the scenarios against: udp://HOST:PORT or "
+    live_group = run.add_argument_group("scenarios and live targets")
+    live_group.add_argument("--target", metavar="URL", help="a live node to run the scenarios against: udp://HOST:PORT or "
                                                       "imc+udp://HOST:PORT/ (IPv6 as udp://[::1]:PORT)")
-    live.add_argument("--bind", metavar="HOST[:PORT]", help="where the session listens (default: loopback, any port)")
-    live.add_argument("--src", type=system_id, default=None, metavar="ID",
+    live_group.add_argument("--bind", metavar="HOST[:PORT]", help="where the session listens (default: loopback, any port)")
+    live_group.add_argument("--src", type=system_id, default=None, metavar="ID",
                       help="the session's own IMC id (default 0x4CF0)")
-    live.add_argument("--dst", type=system_id, default=None, metavar="ID",
+    live_group.add_argument("--dst", type=system_id, default=None, metavar="ID",
                       help="the node's IMC id: start at once instead of waiting for a frame from the node")
-    live.add_argument("--startup", type=positive_seconds, default=10.0, metavar="SECONDS",
+    live_group.add_argument("--startup", type=positive_seconds, default=10.0, metavar="SECONDS",
                       help="how long to wait for a first valid frame from the target (default 10)")
-    live.add_argument("--allow-multicast", action="store_true",
+    live_group.add_argument("--allow-multicast", action="store_true",
                       help="allow a multicast or broadcast target or bind (never needed on loopback)")
-    live.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+    live_group.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                       help="what a scenario needs from the target, e.g. peer=lauv-xplore-2 (list --scenarios names them)")
-    live.add_argument("--allow-effects", nargs="?", const="all", metavar="EFFECTS",
+    live_group.add_argument("--allow-effects", nargs="?", const="all", metavar="EFFECTS",
                       help="run scenarios with side effects on the target: all, or a comma-separated list "
                            "(default: only effect-free scenarios)")
-    live.add_argument("--claims", metavar="FILE", help='JSON {"services": [...]}: the services the target implements; '
+    live_group.add_argument("--claims", metavar="FILE", help='JSON {"services": [...]}: the services the target implements; '
                                                        "scenarios of other services are UNSUPPORTED")
-    live.add_argument("--profile", metavar="NAME", help="where deployed practice differs from the seeds (default seed)")
-    live.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
+    live_group.add_argument("--profile", metavar="NAME", help="where deployed practice differs from the seeds (default seed)")
+    live_group.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
                       help="multiply every time bound by F (slow links)")
-    live.add_argument("--dry-run", action="store_true", help="print what the scenarios would send, and send nothing")
+    live_group.add_argument("--dry-run", action="store_true", help="print what the scenarios would send, and send nothing")
+    live_group.add_argument("--robustness", action="store_true",
+                            help="also run the robustness phase: every corpus frame, then 10,000 garbage datagrams, "
+                                 "after which every request kind answered before must still be answered")
+    live_group.add_argument("--restart-cmd", metavar="CMD",
+                            help="a command that restarts the target (split like a shell would, never run by one): "
+                                 "lets the robustness phase bisect to the frame that silenced it")
     add_reports(run)
     run.set_defaults(func=command_run)
     lst = sub.add_parser("list", help="list the selected cases (id, expectation, clause)")

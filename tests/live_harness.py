@@ -1,4 +1,4 @@
-"""Scenarios against the reference node (or a broken one) on virtual time, through the runner: the path the CLI
+"""Live cases against the reference node (or a broken one) on virtual time, through the runner: the path the CLI
 takes with --target, with an in-memory link instead of UDP."""
 
 from __future__ import annotations
@@ -12,27 +12,44 @@ from imc_conformance.suites.imc.peer import DEFAULT_SYSTEM, ImcPeer
 NODE, OWN = ("127.0.0.1", 6002), ("127.0.0.1", 6001)
 PARAMS = {"peer": "imc-peer-1", "beacon": "b1", "sms_number": "+351000000000", "remote_system": 8208}
 EVERYTHING = {"params": PARAMS, "effects": {"all"}}
+LIVE_KINDS = ("scenario", "robustness")
 
 
-def scenario_cases(cases, ids=None):
-    return [c for c in cases if c.kind == "scenario" and (ids is None or c.id in ids)]
+def scenario_cases(cases, ids=None, kinds=("scenario",)):
+    return [c for c in cases if c.kind in kinds and (ids is None or c.id in ids)]
 
 
-def virtual_session(suite, edition: str, node=None, **node_options):
-    node = node or ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=NODE, **node_options)
-    link = VirtualLink(node, NODE, OWN)
+def virtual_session(suite, edition: str, node=None, restartable: bool = False, **node_options):
+    """A session with a node on virtual time; ``restartable``: the session may restart it (a fresh node made
+    with the same options), as --restart-cmd lets it restart a real one."""
+    def fresh():
+        return ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=NODE, **node_options)
+
+    link = VirtualLink(node or fresh(), NODE, OWN)
     peer = ImcPeer(suite.defs, system=DEFAULT_SYSTEM, node=None, service=f"imc+udp://{OWN[0]}:{OWN[1]}/",
                    host=NODE[0], epoch=link.epoch)
     hello = {"implementation": "reference node (virtual)", "suites": ["imc"], "byte_orders": ["le", "be"],
-             "kinds": ["scenario"]}
-    return DatagramSession(link, peer, suite.wire, hello, startup=10.0), link
+             "kinds": list(LIVE_KINDS)}
+
+    def restart():
+        link.node = fresh()
+        link.restarts += 1
+        return None
+
+    link.restarts = 0
+    return DatagramSession(link, peer, suite.wire, hello, startup=10.0, restart=restart if restartable else None), link
 
 
-def run_virtual(suite, cases, edition=None, options=None, strict=False, **node_options):
-    """The result of the scenarios among ``cases`` against a node made with ``node_options``, and its link."""
+def run_virtual(suite, cases, edition=None, options=None, strict=False, kinds=("scenario",), restartable=False,
+                **node_options):
+    """The result of the live cases of ``kinds`` among ``cases`` against a node made with ``node_options``, and
+    its link. The robustness phase replays the vector cases among ``cases``."""
     edition = edition or suite.editions[0]
-    session, link = virtual_session(suite, edition, **node_options)
-    result = run_cases(session, suite, scenario_cases(cases), edition=edition, adapter="virtual",
-                       options=EVERYTHING if options is None else options, strict=strict, clock=link.now,
-                       started="2026-01-01T00:00:00+00:00")
+    session, link = virtual_session(suite, edition, restartable=restartable, **node_options)
+    options = dict(EVERYTHING if options is None else options)
+    options.setdefault("corpus", tuple(c for c in cases if c.kind == "vector"))
+    options.setdefault("robustness", "robustness" in kinds)
+    options.setdefault("restart", restartable)
+    result = run_cases(session, suite, scenario_cases(cases, kinds=kinds), edition=edition, adapter="virtual",
+                       options=options, strict=strict, clock=link.now, started="2026-01-01T00:00:00+00:00")
     return result, link

@@ -35,6 +35,12 @@ CAUGHT = {
     "raw-accepted": ("imc/AcousticRequest/scenario/raw-without-devdatabinary", "FAIL"),
     "keeps-expired-commands": ("imc/RemoteCommand/scenario/expired-dropped", "FAIL"),
     "no-heartbeat": ("imc/Heartbeat/scenario/periodic", "NON_STRICT"),
+    "silent-on-unsupported": ("imc/AcousticOperation/scenario/unsupported-op", "NON_STRICT"),
+    "ignores-timeout": ("imc/AcousticRequest/scenario/timeout", "NON_STRICT"),
+    "ignores-max-size": ("imc/HistoricDataQuery/scenario/max-size", "NON_STRICT"),
+    "transmits-logged-samples": ("imc/HistoricDataQuery/scenario/sample-priority", "NON_STRICT"),
+    "ignores-remote-commands": ("imc/RemoteCommand/scenario/executed", "NON_STRICT"),
+    "leaks-on-drop": ("imc/AcousticSystemsQuery/robustness/still-served", "FAIL"),
 }
 
 
@@ -60,7 +66,8 @@ def test_every_broken_behaviour_has_a_catching_scenario():
 @pytest.mark.parametrize("broken", sorted(BREAKS))
 def test_each_broken_node_is_caught(suite, cases, broken):
     case_id, verdict = CAUGHT[broken]
-    result, _ = run_virtual(suite, cases, broken=broken)
+    kinds = ("robustness",) if "/robustness/" in case_id else ("scenario",)
+    result, _ = run_virtual(suite, cases, broken=broken, kinds=kinds)
     assert verdicts(result).get(case_id) == verdict, next((c.detail for c in result.cases if c.id == case_id), "absent")
     case = next(c for c in result.cases if c.id == case_id)
     group = case_id.split("/")[1]
@@ -70,7 +77,7 @@ def test_each_broken_node_is_caught(suite, cases, broken):
         assert result.exit_code() == 1 and message.verdict == "FAIL"
     else:  # a SHOULD: caught, failing only under --strict
         assert result.exit_code() == 0
-        strict, _ = run_virtual(suite, cases, broken=broken, strict=True)
+        strict, _ = run_virtual(suite, cases, broken=broken, strict=True, kinds=kinds)
         assert strict.exit_code() == 1
 
 
@@ -169,3 +176,23 @@ def test_the_profile_can_excuse_but_never_pass_silence(suite, cases):
     assert by_id["imc/LblConfig/scenario/get-cfg"].verdict is Verdict.FAIL  # the reply itself cannot be relaxed
     assert by_id["imc/SmsTx/scenario/state"].verdict is Verdict.INCONCLUSIVE
     assert "no SMS here (y)" in by_id["imc/SmsTx/scenario/state"].detail
+
+
+def test_every_testable_statement_is_covered_and_every_live_case_covers_one(suite, cases):
+    from imc_conformance.kinds.scenario.coverage import coverers
+
+    live = [c.data for c in cases if c.kind in ("scenario", "robustness")]
+    covered = coverers(live)
+    testable = [s["id"] for s in suite.statements if "untestable" not in s]
+    assert len(suite.statements) >= 70 and [s for s in testable if s not in covered] == []
+    assert [c["id"] for c in live if not c.get("covers") and not any(s.get("covers") for s in c.get("steps", ()))] == []
+
+
+def test_a_step_may_not_cover_an_unknown_or_untestable_statement(suite, cases):
+    from imc_conformance.suites.imc.suite import scenario_problem
+
+    case = next(c.data for c in cases if c.id == "imc/LblConfig/scenario/get-cfg")
+    for sid, why in (("LblConfig.nothing", "not a statement"), ("LblRange.notify", "marked untestable")):
+        broken = dict(case, steps=[dict(case["steps"][0]), dict(case["steps"][1], covers=[sid])])
+        problem = scenario_problem(suite, broken)
+        assert problem is not None and problem[0] == ".steps[1].covers[0]" and why in problem[1]

@@ -20,7 +20,8 @@ from imc_conformance.paths import VECTORS
 
 SCHEMA_DIR = VECTORS / "schema"
 ROS_SCHEMAS = ("ros_acomms-definitions", "ros_acomms-vectors", "ros_acomms-errata", "ros_acomms-examples")
-SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples", "scenarios", "exchanges", "profile",
+SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples", "scenarios", "robustness", "exchanges",
+                "profile", "statements",
                 *ROS_SCHEMAS, "waivers", "result")
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
 IMC = VECTORS / "imc"
@@ -35,8 +36,8 @@ def schema_name_for(path: Path) -> str:
     ros_acomms/<name>.json ros_acomms-<name>."""
     if path.parent == IMC / "cases":
         return "vectors"
-    if path.parent.name == "scenarios":
-        return "scenarios"
+    if path.parent.name in ("scenarios", "robustness"):
+        return path.parent.name
     if path.parent.name == "profiles":
         return "profile"
     if path.parent == IMC and path.stem in SCHEMA_NAMES:

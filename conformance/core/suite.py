@@ -112,9 +112,12 @@ class Suite(ABC):
     def commands(self, subparsers) -> None:
         """Add the suite's own subcommands to the command line (none by default)."""
 
+    behaviour: dict | None = None  # what the suite's live case kinds share (exchanges, parameters, effects, services)
+
     def open_target(self, target: str, **settings):
         """A session with a live target (``--target``), for the suite's scenarios; ValueError with a one-line
-        reason if it cannot be opened. Settings: ``bind``, ``src``, ``dst``, ``allow_group``, ``startup``."""
+        reason if it cannot be opened. Settings: ``bind``, ``src``, ``dst``, ``allow_group``, ``startup``,
+        ``restart`` (a function restarting the target, or None)."""
         raise ValueError(f"the suite {self.name!r} has no live targets")
 
     def profile(self, name: str) -> dict:

@@ -48,9 +48,11 @@ class DatagramSession:
     incidents: tuple = ()
     stderr = ""
 
-    def __init__(self, transport: Transport, peer: Peer, wire, hello: dict, startup: float):
-        """``startup``: seconds to wait for the target to show itself before every scenario is INCONCLUSIVE."""
+    def __init__(self, transport: Transport, peer: Peer, wire, hello: dict, startup: float, restart=None):
+        """``startup``: seconds to wait for the target to show itself before every scenario is INCONCLUSIVE;
+        ``restart()``: restarts the target (None, or why it could not), for the robustness phase to bisect."""
         self.transport, self.peer, self.wire, self._hello, self.startup = transport, peer, wire, hello, startup
+        self.restart = restart
         self.name = hello["implementation"]
 
     def hello(self) -> dict:
@@ -60,13 +62,7 @@ class DatagramSession:
         jobs = list(jobs)
         if not jobs:
             return
-        t = self.transport.now()
-        self._send(self.peer.start(t))
-        bound = t + self.startup
-        while not self.peer.ready and t < bound:
-            self._step(min(bound, self.peer.deadline or bound), None)
-            t = self.transport.now()
-        if not self.peer.ready:
+        if not self._introduce():
             why = (f"inconclusive: no valid frame from {self.name} within {self.startup:g} s (is it running, and does "
                    "it answer peers that announce themselves? --dst starts at once)")
             for job in jobs:
@@ -77,13 +73,35 @@ class DatagramSession:
         self._transmit(conductor.start(self.transport.now()))
         while True:
             while conductor.finished:
-                job, machine = conductor.finished.pop(0)
-                yield job, Answer("ok", message=machine.record())
+                job, record = conductor.finished.pop(0)
+                yield job, Answer("ok", message=record)
             if conductor.done:
                 return
+            if conductor.restart_wanted:
+                self._transmit(conductor.restarted(self.transport.now(), self._restart()))
+                continue
             deadline = min((x for x in (conductor.deadline, self.peer.deadline) if x is not None),
                            default=self.transport.now())
             self._step(deadline, conductor)
+
+    def _introduce(self) -> bool:
+        """Introduce the session to the target and wait (bounded) until it shows itself; whether it did."""
+        t = self.transport.now()
+        self._send(self.peer.start(t))
+        bound = t + self.startup
+        while not self.peer.ready and t < bound:
+            self._step(min(bound, self.peer.deadline or bound), None)
+            t = self.transport.now()
+        return self.peer.ready
+
+    def _restart(self) -> str | None:
+        """Restart the target and introduce the session again; why that failed, or None."""
+        if self.restart is None:
+            return "the session cannot restart the target"
+        problem = self.restart()
+        if problem is None and not self._introduce():
+            problem = f"no valid frame from {self.name} within {self.startup:g} s of the restart"
+        return problem
 
     def _step(self, until: float, conductor: Conductor | None) -> None:
         got = self.transport.receive(until)

@@ -26,9 +26,17 @@ class DataSuite(Suite):
         return json.loads(self.data("rules.json").read_text(encoding="utf-8"))["rules"]
 
     @cached_property
-    def behaviour(self) -> dict:
-        """The exchanges file: request/reply rules, and the parameters, effects and services of scenarios."""
-        return json.loads(self.data("exchanges.json").read_text(encoding="utf-8"))
+    def behaviour(self) -> dict | None:
+        """The exchanges file (request/reply rules, and the parameters, effects and services of live cases), or
+        None for a suite without one."""
+        path = self.data("exchanges.json")
+        return json.loads(path.read_text(encoding="utf-8")) if path.exists() else None
+
+    @cached_property
+    def statements(self) -> list[dict]:
+        """The behavioural statements live cases cite (statements.json), or none."""
+        path = self.data("statements.json")
+        return json.loads(path.read_text(encoding="utf-8"))["statements"] if path.exists() else []
 
     def profile(self, name: str) -> dict:
         """A profile of the folder, else of the packaged data, checked against its schema."""
@@ -68,6 +76,7 @@ def write_generated(root: Path, files: dict[str, str], check: bool, label: str) 
         (root / name).unlink()
     for name in drift:
         (root / name).write_text(files[name], encoding="utf-8")
-    total = sum(len(json.loads(t)["cases"]) for n, t in files.items() if n.startswith("cases/"))
-    print(f"{total} cases in {len(files) - 1} files; {len(drift)} written, {len(stale)} removed")
+    case_files = [t for n, t in files.items() if n.startswith("cases/")]
+    total = sum(len(json.loads(t)["cases"]) for t in case_files)
+    print(f"{total} cases in {len(case_files)} files; {len(drift)} written, {len(stale)} removed")
     return 0

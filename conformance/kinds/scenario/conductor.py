@@ -1,11 +1,17 @@
 """Run many scenario machines against one target at once, sans-IO.
 
 Scenarios that share a resource (declared, or a message they wait for) run one after another; the others
-run together, so a set costs about its longest chain, not its sum. What arrives is parsed once and
-routed: a reply that echoes a value a scenario's request carried (a request id, a sequence number), or that
-is addressed to the entity a scenario's requests came from, goes to that scenario only, and a late reply to a
-scenario that has ended goes to nobody; anything else goes to every running scenario, which takes what its current step waits for. The caller does the I/O: it sends
-what ``start``/``deliver``/``wake`` return, calls ``wake`` at ``deadline``, and collects ``finished``.
+run together, so a set costs about its longest chain, not its sum. A program may be ``exclusive`` (it runs
+alone: the robustness phase floods the target) and may belong to a ``batch`` (programs of one batch share
+one machine: the robustness phase probes every request kind after each block of frames it sends). What
+arrives is parsed once and routed: a reply that echoes a value a scenario's request carried (a request id,
+a sequence number), or that is addressed to the entity a scenario's requests came from, goes to that
+scenario only, and a late reply to a scenario that has ended goes to nobody; anything else goes to every
+running scenario, which takes what its current step waits for.
+
+The caller does the I/O: it sends what ``start``/``deliver``/``wake``/``restarted`` return, calls ``wake`` at
+``deadline``, restarts the target when ``restart_wanted`` says so (then calls ``restarted``), and collects
+``finished`` as (job, record).
 """
 
 from __future__ import annotations
@@ -13,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .machine import Machine, Program, _hashable
+from .matchers import hashable
 from .wire import Addressing, Composed
 
 
@@ -26,15 +32,16 @@ class Outgoing:
 class Conductor:
     def __init__(self, jobs: list, program_of: Callable, addressing: Addressing, epoch: Callable[[float], float],
                  first_unique: int = 1000, entities: range = range(1, 250)):
-        """``jobs``: in the order to run them; ``program_of(job)``: its Program; ``epoch(t)``: seconds since
+        """``jobs``: in the order to run them; ``program_of(job)``: its program; ``epoch(t)``: seconds since
         1970 at monotonic time t (what the session stamps frames with)."""
         self.jobs = list(jobs)
         self.pending = list(range(len(self.jobs)))  # jobs by index (a job need not be hashable)
         self.program_of, self.addressing, self.epoch = program_of, addressing, epoch
-        self.running: dict[int, Machine] = {}
-        self.finished: list[tuple[object, Machine]] = []
-        self.owners: dict[tuple, object] = {}
-        self.entities: dict[int, int] = {}  # the entity each job's requests came from (the latest job wins)
+        self.running: dict[int, object] = {}  # first member's index -> machine
+        self.members: dict[int, list[int]] = {}  # first member's index -> every job the machine runs
+        self.finished: list[tuple[object, dict]] = []
+        self.owners: dict[tuple, int] = {}
+        self.entities: dict[int, int] = {}  # the entity each machine's requests came from (the latest wins)
         self._next_unique, self._entities, self._entity = first_unique, entities, 0
 
     @property
@@ -46,6 +53,10 @@ class Conductor:
         times = [m.deadline for m in self.running.values() if m.deadline is not None]
         return min(times, default=None)
 
+    @property
+    def restart_wanted(self) -> bool:
+        return any(getattr(m, "restart_wanted", False) for m in self.running.values())
+
     def unique(self, _name: str) -> int:
         """A number no other request of the run carries (request ids, sequence numbers)."""
         self._next_unique = self._next_unique % 0xFFF0 + 1
@@ -53,20 +64,33 @@ class Conductor:
 
     def start(self, t: float) -> list[Outgoing]:
         out = []
-        busy = set().union(*(m.program.resources() for m in self.running.values()))
+        programs = {j: self.program_of(self.jobs[j]) for j in self.pending}
+        if any(getattr(self.program_of(self.jobs[k]), "exclusive", False) for k in self.running):
+            return []
+        busy = set().union(*(self.program_of(self.jobs[k]).resources() for k in self.running))
         for job in list(self.pending):
-            program: Program = self.program_of(self.jobs[job])
-            if program.resources() & busy:
+            if job not in self.pending:
+                continue  # started with its batch
+            program = programs[job]
+            if getattr(program, "exclusive", False):
+                if self.running:
+                    break  # it waits for what runs, and nothing after it starts before it
+            elif program.resources() & busy:
                 continue
-            self.pending.remove(job)
+            batch = getattr(program, "batch", None)
+            members = [j for j in self.pending if batch is not None and getattr(programs[j], "batch", None) is batch] or [job]
+            for j in members:
+                self.pending.remove(j)
             busy |= program.resources()
             entity = self._entities[self._entity % len(self._entities)]
             self._entity += 1
             addressing = Addressing(self.addressing.system, entity, self.addressing.node)
             self.entities[entity] = job
-            machine = Machine(program, addressing, self.unique)
-            self.running[job] = machine
+            machine = program.machine(addressing, self.unique, [programs[j] for j in members])
+            self.running[job], self.members[job] = machine, members
             out += self._sent(job, machine, machine.start(t, self.epoch(t)))
+            if getattr(program, "exclusive", False):
+                break
         return out + self._reap(t)
 
     def deliver(self, t: float, parsed) -> list[Outgoing]:
@@ -92,18 +116,27 @@ class Conductor:
                 out += self._sent(job, machine, machine.wake(t, self.epoch(t)))
         return out + self._reap(t)
 
-    def abandon(self) -> list[tuple[object, Machine]]:
-        """Every job not finished (the run was stopped): those running, then those pending."""
-        return [(self.jobs[j], self.running[j]) for j in self.running] + [(self.jobs[j], None) for j in self.pending]
+    def restarted(self, t: float, problem: str | None) -> list[Outgoing]:
+        """The target was restarted (``problem``: why it could not be, or None)."""
+        out = []
+        for job, machine in list(self.running.items()):
+            if getattr(machine, "restart_wanted", False):
+                out += self._sent(job, machine, machine.restarted(t, self.epoch(t), problem))
+        return out + self._reap(t)
 
-    def _owner(self, parsed):
-        """The job a reply belongs to: the one whose request it echoes (the latest to send such a request), else
-        the one it is addressed to (the session gives each scenario its own entity), if any."""
+    def abandon(self) -> list[tuple[object, object]]:
+        """Every job not finished (the run was stopped), with its machine if it was running."""
+        return ([(self.jobs[j], self.running[k]) for k in self.running for j in self.members[k]]
+                + [(self.jobs[j], None) for j in self.pending])
+
+    def _owner(self, parsed) -> int | None:
+        """The machine a reply belongs to: the one whose request it echoes (the latest to send such a request),
+        else the one it is addressed to (the session gives each machine its own entity), if any."""
         if parsed.decoded is None:
             return None
         owner = None
         for (message, echoes), job in self.owners.items():
-            if message == parsed.message and all(_hashable(parsed.fields.get(f)) == v for f, v in echoes):
+            if message == parsed.message and all(hashable(parsed.fields.get(f)) == v for f, v in echoes):
                 owner = job
         if owner is None and self.jobs:
             to = self.program_of(self.jobs[0]).wire.destination(parsed)
@@ -111,16 +144,18 @@ class Conductor:
                 owner = self.entities[to[1]]
         return owner
 
-    def _sent(self, job, machine: Machine, composed: list[Composed]) -> list[Outgoing]:
+    def _sent(self, job: int, machine, composed: list[Composed]) -> list[Outgoing]:
         while len(machine.keys) > machine.keys_seen:
             key = machine.keys[machine.keys_seen]
             machine.keys_seen += 1
             self.owners.pop(key, None)
             self.owners[key] = job  # a later request with the same echoed values takes the replies over
-        return [Outgoing(job, c) for c in composed]
+        return [Outgoing(self.jobs[job], c) for c in composed]
 
     def _reap(self, t: float) -> list[Outgoing]:
         ended = [job for job, m in self.running.items() if m.done]
         for job in ended:
-            self.finished.append((self.jobs[job], self.running.pop(job)))
+            machine = self.running.pop(job)
+            for i, member in enumerate(self.members.pop(job)):
+                self.finished.append((self.jobs[member], machine.record(i)))
         return self.start(t) if ended and self.pending else []

@@ -30,100 +30,24 @@ class ScenarioKind:
         self.wire, self.behaviour = wire, behaviour
         self.exchanges = tuple(behaviour["exchanges"])
 
-    # ------------------------------------------------------------ the run's options, checked
-
-    def parameters(self, items: list[str]) -> dict:
-        """``NAME=VALUE`` items as the run's parameters, typed; ValueError for an unknown or malformed one."""
-        known, out = self.behaviour["params"], {}
-        for item in items:
-            name, sep, value = item.partition("=")
-            if not sep or name not in known:
-                raise ValueError(f"--param {item!r}: expected NAME=VALUE with NAME one of {', '.join(known) or 'none'}")
-            if known[name]["type"] == "integer":
-                try:
-                    out[name] = int(value, 0)
-                except ValueError:
-                    raise ValueError(f"--param {item!r}: {name} is an integer (e.g. {known[name]['example']})") from None
-            else:
-                out[name] = value
-        return out
-
-    def effects(self, text: str | None) -> set[str]:
-        """The effects ``--allow-effects`` allows: none by default, ``all``, or a comma-separated list."""
-        if text is None:
-            return set()
-        names = {n.strip() for n in text.split(",") if n.strip()}
-        unknown = names - set(self.behaviour["effects"]) - {"all"}
-        if unknown or not names:
-            raise ValueError(f"--allow-effects {text!r}: expected all or a comma-separated list of "
-                             f"{', '.join(self.behaviour['effects'])}")
-        return names
-
-    def claims(self, doc) -> set[str]:
-        """The services a claims document (``{"services": [...]}``) says the target implements."""
-        if not isinstance(doc, dict) or not isinstance(doc.get("services"), list) or set(doc) - {"services", "description"}:
-            raise ValueError('expected {"services": [NAME, ...]} (optionally with "description")')
-        unknown = [s for s in doc["services"] if s not in self.behaviour["services"]]
-        if unknown:
-            raise ValueError(f"unknown service {str(unknown[0])[:40]!r} (services: {', '.join(self.behaviour['services'])})")
-        return set(doc["services"])
-
     # ------------------------------------------------------------ planning and judging
 
     def admit(self, case: dict, options: dict) -> str | None:
-        allowed = options.get("effects", set())
-        barred = [e for e in case.get("effects", ()) if e not in allowed and "all" not in allowed]
-        if barred:
-            return f"effects not allowed: {', '.join(barred)}; --allow-effects {','.join(barred)} runs them"
-        return None
+        return effects_barred(case, options)
 
     def plan(self, case: dict, edition: str, emits: set[str], options: dict | None = None) -> list[Request]:
         options = options or {}
         if expectation(case, edition) is None:
             return []
-        params = options.get("params", {})
-        missing = [p for p in case.get("needs", ()) if p not in params]
-        if missing:
-            why = "; ".join(f"--param {p}=... ({self.behaviour['params'][p]['description']})" for p in missing)
-            return [skip("INCONCLUSIVE", f"not run: needs {why}")]
-        claims = options.get("claims")
-        service = case.get("service")
-        if claims is not None and service is not None and service not in claims:
-            return [skip("UNSUPPORTED", f"not run: the target does not claim the service {service!r}")]
-        for rule in (options.get("profile") or {}).get("rules", ()):
-            if "not_applicable" in rule and any(fnmatch.fnmatchcase(case["id"], g) for g in rule["scenarios"]):
-                return [skip("INCONCLUSIVE", f"not applicable under the profile: {rule['not_applicable']} "
-                                             f"({rule['citation']})")]
-        program = Program(case["id"], case, self.exchanges, self.wire, edition, dict(params),
+        skipped = gate(case, options, self.behaviour)
+        if skipped is not None:
+            return [skipped]
+        program = Program(case["id"], case, self.exchanges, self.wire, edition, dict(options.get("params", {})),
                           float(options.get("time_scale", 1.0)))
         return [Request("scenario", "scenario", params={"program": program, "profile": options.get("profile")})]
 
     def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult | Judgement:
-        if request.op == "skip":
-            return CheckResult("scenario", Verdict(request.params["verdict"]), request.params["reason"])
-        if answer.kind != "ok":
-            return CheckResult("scenario", ANSWER_VERDICTS.get(answer.kind, Verdict.ADAPTER_ERROR),
-                               answer.reason or answer.kind)
-        record = answer.message
-        if record.get("error"):
-            return Judgement([CheckResult("scenario", Verdict.INCONCLUSIVE, record["error"])], record["timeline"])
-        relaxed = relaxations(request.params.get("profile") or {}, case["id"])
-        checks = []
-        for f in record["findings"]:
-            level = "SHOULD" if f["check"] in relaxed and ":" in f["check"][5:] else f["level"]
-            verdict = Verdict.PASS if f["passed"] else (Verdict.FAIL if level == "MUST" else Verdict.NON_STRICT)
-            detail = f["detail"] if f["passed"] else f"{level}: {f['detail']}"
-            checks.append(CheckResult(f["check"], verdict, detail, clause=f["clause"]))
-        if not checks:
-            checks.append(CheckResult("scenario", Verdict.INCONCLUSIVE, "no step was judged"))
-        for frame in record["frames"]:
-            ok = frame["problem"] is None
-            checks.append(CheckResult(
-                f"bytes-{frame['n']}", Verdict.PASS if ok else Verdict.FAIL,
-                f"{frame['message'] or 'a frame'} received at {frame['t']} s is well formed" if ok else
-                f"{frame['message'] or 'a frame'} received at {frame['t']} s is malformed: {frame['problem']}",
-                clause=frame["clause"] or case["clause"], filed_under=frame["message"] or self.reply_of(case)))
-        return Judgement(checks, record["timeline"])
+        return judgement(case, request, answer, self.reply_of(case))
 
     def reply_of(self, case: dict) -> str:
         """The message a scenario waits for first (where a malformed frame that names none is filed)."""
@@ -132,6 +56,69 @@ class ScenarioKind:
                 if isinstance(step.get(kind), str):
                     return step[kind]
         return case["steps"][0]["send"]["abbrev"]
+
+
+def effects_barred(case: dict, options: dict) -> str | None:
+    """Why a live case may not run: effects on the target that the run does not allow; or None."""
+    allowed = options.get("effects", set())
+    barred = [e for e in case.get("effects", ()) if e not in allowed and "all" not in allowed]
+    if barred:
+        return f"effects not allowed: {', '.join(barred)}; --allow-effects {','.join(barred)} runs them"
+    return None
+
+
+def gate(case: dict, options: dict, behaviour: dict) -> Request | None:
+    """A request judged without the target when a live case cannot run as asked: INCONCLUSIVE when a parameter
+    it needs is not given or the profile says it does not apply, UNSUPPORTED when the target does not claim its
+    service; else None."""
+    params = options.get("params", {})
+    missing = [p for p in case.get("needs", ()) if p not in params]
+    if missing:
+        why = "; ".join(f"--param {p}=... ({behaviour['params'][p]['description']})" for p in missing)
+        return skip("INCONCLUSIVE", f"not run: needs {why}")
+    claims = options.get("claims")
+    service = case.get("service")
+    if claims is not None and service is not None and service not in claims:
+        return skip("UNSUPPORTED", f"not run: the target does not claim the service {service!r}")
+    for rule in (options.get("profile") or {}).get("rules", ()):
+        if "not_applicable" in rule and any(fnmatch.fnmatchcase(case["id"], g) for g in rule["scenarios"]):
+            return skip("INCONCLUSIVE", f"not applicable under the profile: {rule['not_applicable']} ({rule['citation']})")
+    return None
+
+
+def judgement(case: dict, request: Request, answer: Answer, reply_group: str) -> CheckResult | Judgement:
+    """What a machine's record says about a live case: a failed MUST is FAIL, a failed SHOULD (or a check the
+    profile relaxes) NON_STRICT; every malformed frame it saw fails the message the frame belongs to
+    (``reply_group`` when its header names none)."""
+    if request.op == "skip":
+        return CheckResult(request.check, Verdict(request.params["verdict"]), request.params["reason"])
+    if answer.kind != "ok":
+        return CheckResult(request.check, ANSWER_VERDICTS.get(answer.kind, Verdict.ADAPTER_ERROR),
+                           answer.reason or answer.kind)
+    record = answer.message
+    if record.get("error"):
+        return Judgement([CheckResult(request.check, Verdict.INCONCLUSIVE, record["error"])], record["timeline"])
+    relaxed = relaxations(request.params.get("profile") or {}, case["id"])
+    checks = []
+    for f in record["findings"]:
+        if f.get("inconclusive"):
+            checks.append(CheckResult(f["check"], Verdict.INCONCLUSIVE, f["detail"], clause=f["clause"]))
+            continue
+        level = "SHOULD" if f["check"] in relaxed and ":" in f["check"][5:] else f["level"]
+        verdict = Verdict.PASS if f["passed"] else (Verdict.FAIL if level == "MUST" else Verdict.NON_STRICT)
+        detail = f["detail"] if f["passed"] else f"{level}: {f['detail']}"
+        checks.append(CheckResult(f["check"], verdict, detail, clause=f["clause"]))
+    if not checks:
+        checks.append(CheckResult(request.check, Verdict.INCONCLUSIVE, "no step was judged"))
+    for frame in record["frames"]:
+        ok = frame["problem"] is None
+        what = frame["message"] or "a frame"
+        checks.append(CheckResult(
+            f"bytes-{frame['n']}", Verdict.PASS if ok else Verdict.FAIL,
+            f"{what} received at {frame['t']} s is well formed" if ok else
+            f"{what} received at {frame['t']} s is malformed: {frame['problem']}",
+            clause=frame["clause"] or case["clause"], filed_under=frame["message"] or reply_group))
+    return Judgement(checks, record["timeline"])
 
 
 def skip(verdict: str, reason: str) -> Request:

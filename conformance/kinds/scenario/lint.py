@@ -11,9 +11,17 @@ from .wire import Addressing
 WAITS = ("expect", "sequence", "silence", "alive")
 
 
-def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of) -> tuple[str, str] | None:
+def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
+                  statements: dict) -> tuple[str, str] | None:
     """(JSON path suffix, problem) for the first problem of ``case``, or None. ``known(message)``: whether the
-    suite has the message; ``fields_of(message)``: its field names."""
+    suite has the message; ``fields_of(message)``: its field names; ``statements``: the suite's behavioural
+    statements by id (a step may cover only a testable one)."""
+    for i, step in enumerate(case["steps"]):
+        for j, sid in enumerate(step.get("covers", ())):
+            if sid not in statements:
+                return f".steps[{i}].covers[{j}]", f"{sid!r} is not a statement of statements.json"
+            if "untestable" in statements[sid]:
+                return f".steps[{i}].covers[{j}]", f"{sid!r} is marked untestable in statements.json"
     for key, vocabulary in (("needs", "params"), ("effects", "effects")):
         for i, name in enumerate(case.get(key, ())):
             if name not in behaviour[vocabulary]:

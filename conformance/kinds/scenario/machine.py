@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-from .matchers import mismatch, same, show
+from .exchanges import exchange_for, resolved
+from .matchers import hashable, mismatch, same, show
 from .values import Scope, Unresolved, resolve_matcher, resolve_message
 from .wire import Addressing, Composed, Parsed, Wire
 
@@ -33,6 +34,11 @@ class Program:
     params: dict
     time_scale: float = 1.0
 
+    def machine(self, addressing: Addressing, unique, members) -> "Machine":
+        """The state machine that runs it, for a session speaking from ``addressing``; ``unique(name)`` gives
+        numbers no other request of the run carries."""
+        return Machine(self, addressing, unique)
+
     def resources(self) -> set[str]:
         """What it must not share with a scenario running at the same time: its declared resources and the
         messages it waits for (so no two scenarios wait for the same message at once)."""
@@ -44,22 +50,7 @@ class Program:
 
     def exchange_for(self, message: dict) -> dict | None:
         """The exchange a sent message (values resolved) opens, if any."""
-        for ex in self.exchanges:
-            request = ex["request"]
-            if request["message"] != message["abbrev"]:
-                continue
-            if all(message["fields"].get(f) in [self.wire.resolve(message["abbrev"], f, v, self.edition)
-                                                 for v in values if self._known(message["abbrev"], f, v)]
-                   for f, values in request.get("when", {}).items()):
-                return ex
-        return None
-
-    def _known(self, message: str, path: str, value) -> bool:
-        try:
-            self.wire.resolve(message, path, value, self.edition)
-            return True
-        except KeyError:
-            return False
+        return exchange_for(self.exchanges, self.wire, message, self.edition)
 
 
 @dataclass
@@ -116,7 +107,7 @@ class Machine:
         self.done = False
         self.error: str | None = None  # why the scenario could not run at all (a parameter, a name)
 
-    def record(self) -> dict:
+    def record(self, member: int = 0) -> dict:
         """What the scenario found, as the session hands it to the kind's judge."""
         return {"findings": [asdict(f) for f in self.findings], "timeline": self.timeline,
                 "frames": [asdict(f) for f in self.frames], "error": self.error}
@@ -235,7 +226,7 @@ class Machine:
         self.sent[spec["id"]] = composed
         self.scope.sent[spec["id"]] = composed.decoded.get("fields", {})
         exchange = self.program.exchange_for(message)
-        echoes = tuple((r["reply_field"], _hashable(message["fields"][r["request_field"]]))
+        echoes = tuple((r["reply_field"], hashable(message["fields"][r["request_field"]]))
                        for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo")
         if echoes:
             self.keys.append((exchange["reply"], echoes))
@@ -272,9 +263,8 @@ class Machine:
         exchange = self._exchange(step)
         if exchange is None or parsed.decoded is None or "reply_when" not in exchange:
             return True
-        return all(any(same(parsed.fields.get(f), self.wire.resolve(wanted, f, v, self.edition))
-                       for v in values if self.program._known(wanted, f, v))
-                   for f, values in exchange["reply_when"].items())
+        return all(any(same(parsed.fields.get(f), v) for v in resolved(self.wire, wanted, f, names, self.edition))
+                   for f, names in exchange["reply_when"].items())
 
     def _exchange(self, step: _Step) -> dict | None:
         ref = step.spec.get("reply_to")
@@ -316,7 +306,7 @@ class Machine:
             except Unresolved as exc:
                 problems.append(f"{path}: {exc}")
                 continue
-            why = mismatch(parsed.fields.get(path), resolved)
+            why = mismatch(parsed.fields.get(path), resolved, lambda v: self.wire.size_of(message, path, v))
             if why:
                 problems.append(f"{path} {why}")
         return "; ".join(problems) or None
@@ -324,6 +314,7 @@ class Machine:
     def _on_expect(self, t: float, step: _Step, parsed: Parsed) -> None:
         spec = step.spec
         step.replies.append(parsed)
+        self.scope.replies[spec["id"]] = parsed.fields
         self._log(t, "received", parsed, "matched")
         if len(step.replies) < spec.get("count", 1):
             return
@@ -408,7 +399,8 @@ class Machine:
                             for r in step.replies)
         clause = states.get("clause")
         if step.terminal is None:
-            self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})", "MUST", clause)
+            self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})",
+                       step.spec.get("level", "MUST"), clause)
         else:
             bad = self._match_fields(spec["sequence"], spec.get("terminal", {}), step.terminal)
             self._find(step, "terminal", bad is None, bad or f"ended in {self._terminal_name(step)} ({trail})",
@@ -469,10 +461,6 @@ def _note(step: _Step, key: tuple, bad: str | None) -> None:
     """Keep the first failure of a check over all the replies of a sequence (None: passed so far)."""
     if step.failures.get(key) is None:
         step.failures[key] = bad
-
-
-def _hashable(value):
-    return tuple(value) if isinstance(value, list) else value
 
 
 def _address(pair) -> str:

@@ -3,8 +3,11 @@
 A matcher is a plain value (must equal it) or an object with one of these keys: ``equal``, ``one_of``
 (a list), ``range`` (``[min, max]``, either null for no bound, inclusive), ``any``, ``present`` (not
 null), ``null``, ``pattern`` (a regular expression the whole text matches), ``contains_item`` (a
-``separator``-separated text list holds the item; ``","`` by default). Values are already resolved (enum
-names to numbers, parameters to their values) when they reach ``mismatch``.
+``separator``-separated text list holds the item; ``","`` by default), ``contains_message`` and
+``lacks_message`` (an inline message anywhere inside: a name, or ``{"abbrev", "fields"}`` whose fields it
+must hold among its own), ``encoded_at_most`` (the value takes at most that many bytes on the wire, as the
+suite's wire counts them), ``all_of`` (a list of matchers, each must hold). Values are already resolved (enum names to numbers, parameters to their values)
+when they reach ``mismatch``.
 """
 
 from __future__ import annotations
@@ -13,19 +16,21 @@ import math
 import re
 
 KEYS = ("equal", "one_of", "range", "any", "present", "null", "pattern", "contains_item", "contains_message",
-        "lacks_message")
+        "lacks_message", "encoded_at_most", "all_of")
 
 
 def is_matcher(spec) -> bool:
     return isinstance(spec, dict) and len(set(spec) & set(KEYS)) == 1 and set(spec) <= {*KEYS, "separator"}
 
 
-def mismatch(value, spec) -> str | None:
-    """Why ``value`` does not satisfy ``spec``, or None."""
+def mismatch(value, spec, size_of=None) -> str | None:
+    """Why ``value`` does not satisfy ``spec``, or None; ``size_of(value)``: its size on the wire in bytes."""
     if not is_matcher(spec):
         return None if same(value, spec) else f"{show(value)}, expected {show(spec)}"
     if "equal" in spec:
         return None if same(value, spec["equal"]) else f"{show(value)}, expected {show(spec['equal'])}"
+    if "all_of" in spec:
+        return "; ".join(filter(None, (mismatch(value, m, size_of) for m in spec["all_of"]))) or None
     if "one_of" in spec:
         if any(same(value, v) for v in spec["one_of"]):
             return None
@@ -44,11 +49,14 @@ def mismatch(value, spec) -> str | None:
     if "null" in spec:
         return None if value is None else f"{show(value)}, expected null"
     if "contains_message" in spec:
-        found = spec["contains_message"] in inline_names(value)
-        return None if found else f"{show(value)} holds no {spec['contains_message']}"
+        wanted = spec["contains_message"]
+        return None if holds(value, wanted) else f"{show(value)} holds no {show(wanted)}"
     if "lacks_message" in spec:
-        found = spec["lacks_message"] in inline_names(value)
-        return f"{show(value)} holds a {spec['lacks_message']}" if found else None
+        wanted = spec["lacks_message"]
+        return f"{show(value)} holds {show(wanted)}" if holds(value, wanted) else None
+    if "encoded_at_most" in spec:
+        size = size_of(value)
+        return None if size <= spec["encoded_at_most"] else f"{size} bytes on the wire, at most {spec['encoded_at_most']}"
     if not isinstance(value, str):
         return f"{show(value)} is not text"
     if "pattern" in spec:
@@ -57,13 +65,18 @@ def mismatch(value, spec) -> str | None:
     return None if spec["contains_item"] in items else f"{show(value)} does not list {spec['contains_item']!r}"
 
 
-def inline_names(value) -> set[str]:
-    """The names of every inline message anywhere inside a decoded value."""
+def holds(value, wanted) -> bool:
+    """Whether an inline message matching ``wanted`` (a name, or ``{"abbrev", "fields"}`` with some of its
+    fields) is anywhere inside a decoded value."""
     if isinstance(value, list):
-        return set().union(*(inline_names(v) for v in value))
-    if isinstance(value, dict) and "abbrev" in value:
-        return {value["abbrev"]} | inline_names(list(value.get("fields", {}).values()))
-    return set()
+        return any(holds(v, wanted) for v in value)
+    if not (isinstance(value, dict) and "abbrev" in value):
+        return False
+    name, fields = (wanted, {}) if isinstance(wanted, str) else (wanted["abbrev"], wanted.get("fields", {}))
+    own = value.get("fields", {})
+    if value["abbrev"] == name and all(k in own and same(own[k], v) for k, v in fields.items()):
+        return True
+    return holds(list(own.values()), wanted)
 
 
 def same(a, b) -> bool:
@@ -77,6 +90,11 @@ def same(a, b) -> bool:
     if isinstance(a, list) and isinstance(b, list):
         return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
     return type(a) is type(b) and a == b
+
+
+def hashable(value):
+    """A decoded value usable as a key (lists become tuples)."""
+    return tuple(hashable(v) for v in value) if isinstance(value, list) else value
 
 
 def show(value, limit: int = 80) -> str:

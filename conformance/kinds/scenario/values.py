@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 from .matchers import KEYS, is_matcher
 
-SYMBOLS = ("$param", "$unique", "$epoch", "$sent", "$address")
+SYMBOLS = ("$param", "$unique", "$epoch", "$sent", "$reply", "$address")
 
 
 class Unresolved(Exception):
@@ -21,12 +21,14 @@ class Unresolved(Exception):
 @dataclass
 class Scope:
     """What symbols resolve to in one scenario: ``params`` of the run, ``unique(name)`` numbers, ``epoch``
-    now, the decoded fields each send step sent (``sent[step]``), and ``addresses``."""
+    now, the decoded fields each send step sent (``sent[step]``), those of the reply each step matched last
+    (``replies[step]``), and ``addresses``."""
 
     params: dict
     unique: object  # callable name -> int
     epoch: float = 0.0
     sent: dict = field(default_factory=dict)
+    replies: dict = field(default_factory=dict)
     addresses: dict = field(default_factory=dict)  # "system" (the session's), "node"
 
     def symbol(self, spec: dict):
@@ -44,7 +46,10 @@ class Scope:
                 raise Unresolved(f"the {arg}'s address is not known")
             return self.addresses[arg]
         step, _, path = arg.partition(".")
-        value = self.sent[step]
+        source = self.sent if key == "$sent" else self.replies
+        if step not in source:
+            raise Unresolved(f"{key} {arg}: step {step!r} has {'sent' if key == '$sent' else 'matched'} nothing")
+        value = source[step]
         for part in path.split(".") if path else ():
             value = value[int(part)] if isinstance(value, list) else value[part]
         return value
@@ -94,4 +99,6 @@ def resolve_matcher(spec, message: str, path: str, scope: Scope, wire, edition: 
         return {"one_of": kept}
     if key in ("equal", "contains_item"):
         return {**spec, key: resolve_value(arg, message, path, scope, wire, edition)}
+    if key == "all_of":
+        return {"all_of": [resolve_matcher(m, message, path, scope, wire, edition) for m in arg]}
     return spec

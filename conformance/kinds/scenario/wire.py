@@ -62,6 +62,9 @@ class Wire(Protocol):
         """``value`` for field ``path`` of ``message`` with names (enumeration values) turned into what the
         wire carries; raises KeyError for a name the edition lacks."""
 
+    def size_of(self, message: str, path: str, value) -> int:
+        """How many bytes field ``path`` of ``message`` takes on the wire holding ``value``."""
+
     def origin(self, parsed: Parsed) -> tuple | None:
         """(system, entity) that sent it, or None where the protocol has no addresses."""
 

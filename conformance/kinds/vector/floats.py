@@ -68,6 +68,11 @@ def float_from_bits(bits: int, width: int):
     return shortest_float(x, width)
 
 
+def as_float(value) -> float:
+    """A decoded-form float as a Python float (every NaN form is a NaN)."""
+    return float(value.split(":")[0]) if isinstance(value, str) else float(value)
+
+
 def float_to_bits(value, width: int) -> int:
     """IEEE bit pattern of a canonical float value; raises ValueError if it is not one or overflows."""
     if isinstance(value, str):

@@ -57,11 +57,11 @@ def encode_payload(defs: Definitions, mdef: MessageDef, fields: dict, e: str) ->
     for f in mdef.fields:
         if f.abbrev not in fields:
             raise EncodeError("missing-field", f"{mdef.abbrev}.{f.abbrev} is missing")
-        out += _encode_field(defs, mdef, f, fields[f.abbrev], e)
+        out += encode_field(defs, mdef, f, fields[f.abbrev], e)
     return bytes(out)
 
 
-def _encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str) -> bytes:
+def encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str) -> bytes:
     where = f"{mdef.abbrev}.{f.abbrev}"
     try:
         if f.is_float:

@@ -8,7 +8,7 @@ from .peer import DEFAULT_SYSTEM, ImcPeer
 
 
 def open_target(suite, target: str, *, bind: str | None = None, src: int | None = None, dst: int | None = None,
-                allow_group: bool = False, startup: float = 10.0) -> DatagramSession:
+                allow_group: bool = False, startup: float = 10.0, restart=None) -> DatagramSession:
     """The session for ``target`` (``udp://HOST:PORT``, ``imc+udp://HOST:PORT/``); ValueError with a one-line
     reason for a malformed URL, a group address, a host that does not resolve or a bind that fails."""
     host, port = parse_endpoint(target, "--target")
@@ -29,5 +29,5 @@ def open_target(suite, target: str, *, bind: str | None = None, src: int | None 
     peer = ImcPeer(suite.defs, system=DEFAULT_SYSTEM if src is None else src, node=dst,
                    service=f"imc+udp://{shown}:{own_port}/", host=address[0], epoch=transport.epoch)
     hello = {"implementation": f"IMC node at {target}", "suites": [suite.name], "byte_orders": list(suite.encodings),
-             "kinds": ["scenario"]}
-    return DatagramSession(transport, peer, suite.wire, hello, startup)
+             "kinds": ["scenario", "robustness"]}
+    return DatagramSession(transport, peer, suite.wire, hello, startup, restart)

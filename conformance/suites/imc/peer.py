@@ -21,7 +21,8 @@ class ImcPeer:
         ``epoch(t)``: seconds since 1970 at clock time t."""
         self.defs, self.system, self.node, self.service, self.host = defs, system, node, service, host
         self.epoch, self.name = epoch, name
-        self.ready = node is not None
+        self.given = node is not None
+        self.ready = self.given
         self.next_beat = self.next_announce = None
 
     @property
@@ -29,6 +30,8 @@ class ImcPeer:
         return None if self.next_beat is None else min(self.next_beat, self.next_announce)
 
     def start(self, t: float) -> list[tuple[object, bytes]]:
+        """Introduce the session (again, after the target restarted): it is ready once the target shows itself."""
+        self.ready = self.given
         self.next_beat, self.next_announce = t + HEARTBEAT_EVERY, t + ANNOUNCE_EVERY
         announce = self._announce(t)
         return ([(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]

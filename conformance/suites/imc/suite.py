@@ -8,6 +8,7 @@ from functools import cached_property
 from pathlib import Path
 
 from ...core.suite import BuiltinAdapter, Group
+from ...kinds.robustness import RobustnessKind
 from ...kinds.scenario import ScenarioKind
 from ...kinds.vector import VectorKind
 from ...paths import VECTORS
@@ -57,7 +58,7 @@ class ImcSuite(DataSuite):
     encodings = ImcCodec.encodings
     encoding_param = "byte_order"
     group_label = "message"
-    case_folders = {"cases": "vector", "scenarios": "scenario"}
+    case_folders = {"cases": "vector", "scenarios": "scenario", "robustness": "robustness"}
     packaged = IMC
 
     def __init__(self, folder: Path, defs: Definitions):
@@ -72,7 +73,8 @@ class ImcSuite(DataSuite):
     @cached_property
     def kinds(self) -> dict:
         return {"vector": VectorKind(ImcCodec(self.defs, frozenset(r["id"] for r in self.rules))),
-                "scenario": ScenarioKind(self.wire, self.behaviour)}
+                "scenario": ScenarioKind(self.wire, self.behaviour),
+                "robustness": RobustnessKind(self.wire, self.behaviour)}
 
     @cached_property
     def wire(self) -> ImcWire:
@@ -92,7 +94,8 @@ class ImcSuite(DataSuite):
         }
 
     def schema(self, kind: str) -> Path:
-        return VECTORS / "schema" / ("scenarios.schema.json" if kind == "scenario" else "vectors.schema.json")
+        return VECTORS / "schema" / {"scenario": "scenarios.schema.json", "robustness": "robustness.schema.json"}.get(
+            kind, "vectors.schema.json")
 
     def group_of(self, doc: dict) -> str:
         return doc["message"]["abbrev"]
@@ -100,8 +103,8 @@ class ImcSuite(DataSuite):
     def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
         """The first problem of the case's message against the definitions (a decoded form needs its whole
         header); for a scenario, of its steps against the definitions and the exchange rules."""
-        if kind == "scenario":
-            return scenario_problem(self, case)
+        if kind in ("scenario", "robustness"):
+            return scenario_problem(self, case if kind == "scenario" else as_scenario(case))
         if "message" not in case:
             return None
         expects = {case["expect"]} if isinstance(case["expect"], str) else set(case["expect"].values())
@@ -127,7 +130,21 @@ def scenario_problem(suite: ImcSuite, case: dict) -> tuple[str, str] | None:
     effect or service the exchanges file does not, or a step it does not have (as JSON path suffix, problem)."""
     from ...kinds.scenario.lint import lint_scenario
     return lint_scenario(case, suite.wire, suite.behaviour, suite.editions,
-                         lambda m: m in suite.defs.by_abbrev, lambda m: [f.abbrev for f in suite.defs[m].fields])
+                         lambda m: m in suite.defs.by_abbrev, lambda m: [f.abbrev for f in suite.defs[m].fields],
+                         {s["id"]: s for s in suite.statements})
+
+
+def as_scenario(case: dict) -> dict:
+    """A robustness probe as the scenario it amounts to (send, then expect the reply; or alive), for the lint."""
+    probe = case["probe"]
+    if "alive" in probe:
+        steps = [{"id": "alive", "alive": probe["alive"], "within": probe["within"]}]
+    else:
+        steps = [{"id": "probe", "send": probe["send"], "encoding": probe.get("encoding", "le")},
+                 {"id": "reply", "expect": probe["expect"], "reply_to": "probe", "within": probe["within"]}]
+    if "covers" in case:
+        steps[-1]["covers"] = case["covers"]
+    return dict(case, steps=steps)
 
 
 def shim_argv(script: str) -> list[str]:

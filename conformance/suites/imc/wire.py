@@ -8,6 +8,7 @@ import struct
 from ...kinds.scenario import Addressing, Composed, Parsed
 from ...kinds.vector.errors import FrameError
 from . import codec
+from .crc16 import crc16
 from .definitions import Definitions, MessageDef
 
 UNKNOWN_SYSTEM, UNKNOWN_ENTITY = 0xFFFF, 0xFF
@@ -33,6 +34,52 @@ class ImcWire:
                           self.rule_clauses.get(exc.rule), codec.byte_order_of(data))
         return Parsed(data, decoded["abbrev"], decoded, encoding=codec.byte_order_of(data))
 
+    def readdress(self, data: bytes, encoding: str, src: tuple[int, int], dst: int) -> bytes:
+        """A corpus frame as if the session sent it to the node: header src/src_ent and dst rewritten (in the
+        frame's byte order ``encoding``) and its CRC recomputed with the case's defect kept (a frame whose CRC
+        was wrong by some bits stays wrong by the same bits). Frames too short for a header are unchanged."""
+        if len(data) < codec.HEADER_SIZE:
+            return data
+        e = codec.ORDERS[encoding]
+        out = bytearray(data)
+        (size,) = struct.unpack_from(e + "H", data, 4)
+        end = codec.HEADER_SIZE + size if codec.HEADER_SIZE + size + 2 <= len(data) else len(data) - 2
+        delta = None
+        if end >= codec.HEADER_SIZE:
+            (stored,) = struct.unpack_from(e + "H", data, end)
+            delta = stored ^ crc16(data[:end])
+        struct.pack_into(e + "HBH", out, 14, src[0], src[1], dst)
+        if delta is not None:
+            struct.pack_into(e + "H", out, end, crc16(out[:end]) ^ delta)
+        return bytes(out)
+
+    def garbage(self, rng, count: int, src: tuple[int, int], dst: int) -> list[bytes]:
+        """``count`` datagrams a receiver must drop, from the generator ``rng``: random bytes; the sync word in
+        either byte order followed by random bytes; and frames from ``src`` to ``dst`` with a sound header and
+        CRC around a random payload of a real or unknown message id, which reach the payload decoder (kept only
+        if the reference codec refuses them, so none is a valid request)."""
+        ids = sorted(self.defs.by_id)
+        out = []
+        while len(out) < count:
+            kind = len(out) % 3
+            if kind == 0:
+                out.append(rng.randbytes(rng.randrange(1, 600)))
+                continue
+            order = rng.choice(("<", ">"))
+            if kind == 1:
+                out.append(struct.pack(order + "H", self.defs.sync) + rng.randbytes(rng.randrange(0, 300)))
+                continue
+            mgid = rng.choice(ids) if rng.random() < 0.8 else rng.randrange(0, 0x10000)
+            payload = rng.randbytes(rng.randrange(0, 200))
+            body = struct.pack(order + "HHHdHBHB", self.defs.sync, mgid, len(payload), 0.0, src[0], src[1], dst,
+                               0xFF) + payload
+            frame = body + struct.pack(order + "H", crc16(body))
+            try:
+                codec.decode(self.defs, frame)
+            except FrameError:
+                out.append(frame)
+        return out
+
     def named_in_header(self, data: bytes) -> str | None:
         """The message a frame's header names, if it can be read (even when the frame is malformed)."""
         order = codec.byte_order_of(data)
@@ -50,6 +97,10 @@ class ImcWire:
             if v.abbrev == value and v.in_edition(edition):
                 return v.value
         raise KeyError(f"{value} is not a value of {message}.{path} in {edition}")
+
+    def size_of(self, message: str, path: str, value) -> int:
+        mdef = self.defs[message]
+        return len(codec.encode_field(self.defs, mdef, mdef.field(path), value, "<"))
 
     def origin(self, parsed: Parsed) -> tuple | None:
         header = parsed.decoded["header"]

@@ -1,7 +1,8 @@
 """Rebuild the IMC corpus: one vector file per message, the coverage table, deterministically.
 
 ``imc-conformance generate`` (or ``python -m imc_conformance.suites.imc.corpus.build``) writes
-``vectors/imc/cases/*.json`` and ``vectors/imc/coverage.md``; ``--check`` only reports drift.
+``vectors/imc/cases/*.json``, ``vectors/imc/coverage.md`` and the behavioural coverage of the live cases,
+``vectors/imc/behaviour-coverage.md``; ``--check`` only reports drift.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import argparse
 import json
 import sys
 
+from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
 from ..definitions import Definitions, lint_definitions, load_definitions
 from ...data_suite import write_generated
 from ..paths import imc_data
@@ -52,6 +54,8 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
         per_message[mdef.abbrev] = mc.cases
         files[f"cases/{mdef.id:03d}-{mdef.abbrev}.json"] = json.dumps(doc, indent=1, ensure_ascii=True) + "\n"
     files["coverage.md"] = coverage_markdown(defs, per_message)
+    statements = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))["statements"]
+    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()))
     return files
 
 

@@ -22,4 +22,10 @@ BREAKS = {
     "raw-accepted": "a RAW request without a DevDataBinary ends in SENT",
     "keeps-expired-commands": "a RemoteCommand whose timeout has passed is kept for resending",
     "no-heartbeat": "the node never sends a Heartbeat (a SHOULD: caught under --strict)",
+    "silent-on-unsupported": "an AcousticOperation with an operation code it does not know goes unanswered (a SHOULD)",
+    "ignores-timeout": "an AcousticRequest's status ends long after the request's timeout (a SHOULD)",
+    "ignores-max-size": "a QUERY's reply carries all the kept data, whatever max_size says (a SHOULD)",
+    "transmits-logged-samples": "historic samples of priority -127 are kept for transmission (a SHOULD)",
+    "ignores-remote-commands": "a RemoteCommand addressed to the node is not executed (a SHOULD)",
+    "leaks-on-drop": "after 5,000 datagrams it could not decode, no request is served (caught by --robustness)",
 }

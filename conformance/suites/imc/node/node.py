@@ -19,6 +19,8 @@ import struct
 from .. import codec
 from ..crc16 import crc16
 from ..definitions import Definitions
+from ....kinds.vector.floats import as_float
+from ..values import text_bytes
 from ..wire import ImcWire
 from .breaks import BREAKS
 
@@ -49,6 +51,7 @@ class ReferenceNode:
         self.beacons: list = []
         self.kept: list[dict] = []  # RemoteCommands kept for resending
         self.acoustic_dead = False
+        self.dropped = 0  # datagrams that did not decode
         self.next_beat = self.next_announce = None
 
     # ------------------------------------------------------------------ the caller's interface
@@ -64,13 +67,16 @@ class ReferenceNode:
         try:
             message = codec.decode(self.defs, data)
         except ValueError:
+            self.dropped += 1
+            return
+        if self.broken == "leaks-on-drop" and self.dropped >= 5000:
             return
         order = codec.byte_order_of(data)
         if self.broken == "ignores-big-endian" and order == "be":
             return
         src = message["header"]["src"]
         if message["abbrev"] == "Announce":
-            self._contact(t, src, message["fields"]["services"], source)
+            self._contact(t, src, _text(message["fields"]["services"]), source)
             return
         if src not in self.contacts or self._lost(message):
             return
@@ -135,13 +141,16 @@ class ReferenceNode:
         plans = {"RANGE": ("RANGE_IP", "RANGE_RECVED", "RANGE_TIMEOUT"), "REVERSE_RANGE": ("RANGE_IP", "RANGE_RECVED", "RANGE_TIMEOUT"),
                  "MSG": ("MSG_IP", "MSG_DONE", "MSG_FAILURE"), "MSG_SHORT": ("MSG_IP", "MSG_DONE", "MSG_FAILURE"),
                  "ABORT": ("ABORT_IP", "ABORT_ACKED", "ABORT_TIMEOUT")}
-        if op not in plans:
-            return  # a state, not a request
         system = "imc-other-system" if self.broken == "wrong-system" else f["system"]
 
         def state(delay: float, name: str, range_: float = 0.0) -> None:
             fields = {"op": self._v("AcousticOperation", "op", name), "system": system, "range": range_, "msg": None}
             self._reply(t, delay, message, "AcousticOperation", fields, entity=ACOUSTIC_ENTITY)
+
+        if op is None and self.broken != "silent-on-unsupported":
+            state(PROCESSING, "UNSUPPORTED")  # an operation the definitions do not have
+        if op not in plans:
+            return  # a state (sent by another node), not a request
 
         if t < self.modem_free_at:
             state(PROCESSING, "BUSY")
@@ -149,7 +158,7 @@ class ReferenceNode:
         progress, success, failure = plans[op]
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
-        distance = self.peers.get(f["system"])
+        distance = self.peers.get(_text(f["system"]))
         travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + TURNAROUND
         self.modem_free_at = t + travel
         state(PROCESSING, progress)
@@ -176,7 +185,7 @@ class ReferenceNode:
         if t < self.modem_free_at:
             status(PROCESSING, "BUSY", info="the modem is busy")
             return
-        distance = self.peers.get(f["destination"])
+        distance = self.peers.get(_text(f["destination"]))
         if kind == "RAW" and (f["msg"] is None or f["msg"]["abbrev"] != "DevDataBinary") and self.broken != "raw-accepted":
             status(PROCESSING, "UNSUPPORTED", info="RAW expects a DevDataBinary")
             return
@@ -187,9 +196,16 @@ class ReferenceNode:
             status(PROCESSING, "INV_ADDR", info="unknown destination")
             return
         travel = 2 * distance / SOUND_SPEED + TURNAROUND
+        timeout = as_float(f["timeout"])
+        if self.broken == "ignores-timeout":
+            travel += timeout + 2.0
         self.modem_free_at = t + travel
         status(PROCESSING, "IN_PROGRESS")
         if self.broken == "no-terminal":
+            return
+        if travel > timeout and self.broken != "ignores-timeout":  # the request's time is up before the peer's answer
+            self.modem_free_at = t + timeout
+            status(timeout, "INPUT_FAILURE", info="timed out")
             return
         final = "RANGE_RECEIVED" if "RANGE" in kind else "SENT"
         status(travel, final, float(distance) if final == "RANGE_RECEIVED" else 0.0)
@@ -219,21 +235,53 @@ class ReferenceNode:
             self.kept.clear()
             fields = {"req_id": req_id, "type": f["type"], "max_size": f["max_size"], "data": None}
         elif kind == "QUERY":
-            data = None
-            if self.kept:
-                data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0,
-                                                              "data": list(self.kept)}}
-            fields = {"req_id": req_id, "type": self._v("HistoricDataQuery", "type", "REPLY"), "max_size": f["max_size"], "data": data}
+            fields = {"req_id": req_id, "type": self._v("HistoricDataQuery", "type", "REPLY"), "max_size": f["max_size"],
+                      "data": self._historic_data(f["max_size"])}
         else:
             return
         self._reply(t, PROCESSING, message, "HistoricDataQuery", fields)
 
+    def _historic_data(self, max_size: int) -> dict | None:
+        """The kept items, highest priority first, as a HistoricData of at most ``max_size`` bytes (as many
+        items as fit; none when not even an empty one fits)."""
+        items = sorted(self.kept, key=lambda m: -m["fields"].get("priority", 0))
+        while True:
+            data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": items}}
+            if self.broken == "ignores-max-size" or self.wire.size_of("HistoricDataQuery", "data", data) <= max_size:
+                return data if items or self.broken == "ignores-max-size" else None
+            if not items:
+                return None
+            items = items[:-1]
+
+    def _on_HistoricData(self, t: float, message: dict) -> None:
+        """Data for the disruption tolerant network: samples are kept for transmission (those of priority -127
+        are only logged), RemoteCommands inside are handled as if received alone."""
+        for item in message["fields"]["data"]:
+            if item is None:
+                continue
+            if item["abbrev"] == "HistoricSample" and (item["fields"]["priority"] > -127
+                                                       or self.broken == "transmits-logged-samples"):
+                self.kept.append(item)
+            elif item["abbrev"] == "RemoteCommand":
+                self._on_RemoteCommand(t, dict(message, abbrev="RemoteCommand", fields=item["fields"]))
+
     def _on_RemoteCommand(self, t: float, message: dict) -> None:
         f = message["fields"]
         if f["destination"] == self.system:
-            return  # for this node: the seeds name no command it must execute
-        if f["timeout"] > self.epoch0 + t or self.broken == "keeps-expired-commands":
+            if f["cmd"] is not None and self.broken != "ignores-remote-commands":
+                self._execute(t, f)
+            return
+        if as_float(f["timeout"]) > self.epoch0 + t or self.broken == "keeps-expired-commands":
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
+
+    def _execute(self, t: float, command: dict) -> None:
+        """Unpack a command for this node: handle it as a request from its original source."""
+        handler = getattr(self, "_on_" + command["cmd"]["abbrev"], None)
+        if handler is None or command["cmd"]["abbrev"] == "RemoteCommand":
+            return
+        header = {"timestamp": self.epoch0 + t, "src": command["original_source"], "src_ent": UNKNOWN_ENTITY,
+                  "dst": self.system, "dst_ent": UNKNOWN_ENTITY}
+        handler(t, {"abbrev": command["cmd"]["abbrev"], "header": header, "fields": command["cmd"]["fields"]})
 
     # ------------------------------------------------------------------ sending
 
@@ -304,3 +352,8 @@ class ReferenceNode:
             if v.value == value and v.in_edition(self.edition):
                 return v.abbrev
         return None
+
+
+def _text(value) -> str:
+    """A plaintext field as text (bytes that are not UTF-8 replaced), whatever its decoded form."""
+    return text_bytes(value).decode("utf-8", "replace")

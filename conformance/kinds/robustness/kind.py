@@ -1,0 +1,84 @@
+"""Sans-IO planning and judging of robustness cases (``--robustness``), a case kind of the core.
+
+A robustness case is a probe: a request kind of the target and the reply that shows it is served (or a
+message that shows it is alive). The kind plans every admitted probe of a run into one shared phase (the
+corpus frames of the edition, replayed, then garbage), which the session runs as a batch; each probe gets its
+own verdict, filed under its request's message: INCONCLUSIVE if it was not answered before the phase, FAIL if
+it stopped being answered, naming the block and, when the target can be restarted, the frame that did it.
+"""
+
+from __future__ import annotations
+
+from ...core.cases import expectation
+from ...core.results import CheckResult, Judgement
+from ...core.session import Answer, Request
+from ..scenario.kind import effects_barred, gate, judgement
+from .phase import Frame, Phase, ProbeProgram
+
+
+class RobustnessKind:
+    name = "robustness"
+
+    def __init__(self, wire, behaviour: dict):
+        self.wire, self.behaviour = wire, behaviour
+        self.settings = behaviour["robustness"]
+        self._phases: dict = {}
+
+    def admit(self, case: dict, options: dict) -> str | None:
+        if not options.get("robustness"):
+            return "the robustness phase runs only with --robustness"
+        return effects_barred(case, options)
+
+    def plan(self, case: dict, edition: str, emits: set[str], options: dict | None = None) -> list[Request]:
+        options = options or {}
+        if expectation(case, edition) is None:
+            return []
+        skipped = gate(case, options, self.behaviour)
+        if skipped is not None:
+            return [skipped]
+        program = ProbeProgram(case["id"], case, self.phase(edition, options))
+        return [Request("robustness", "scenario", params={"program": program, "profile": options.get("profile")})]
+
+    def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult | Judgement:
+        return judgement(case, request, answer, case["probe"].get("expect") or case["id"].split("/")[1])
+
+    def phase(self, edition: str, options: dict) -> Phase:
+        """The phase every probe of a run shares (one per edition and options)."""
+        corpus = options.get("corpus", ())
+        key = (edition, id(corpus), frozenset(options.get("effects", ())), options.get("restart", False))
+        if key not in self._phases:
+            frames, skipped = self.frames(corpus, edition, options.get("effects", set()))
+            self._phases[key] = Phase(frames, skipped, self.settings, self.wire, tuple(self.behaviour["exchanges"]),
+                                      edition, dict(options.get("params", {})), float(options.get("time_scale", 1.0)),
+                                      bool(options.get("restart")))
+        return self._phases[key]
+
+    def frames(self, corpus, edition: str, allowed: set[str]) -> tuple[list[Frame], list[str]]:
+        """Every frame of the byte vectors of ``edition``, in corpus order, but those too large for one datagram
+        and the accepted frames of requests whose effects the run does not allow; and why each group was left
+        out."""
+        limit, never = self.settings["datagram_limit"], self.settings["never_replayed"]
+        effects = self.behaviour.get("message_effects", {})
+        out, too_large, barred = [], [], {}
+        for case in corpus:
+            expect = expectation(case.data, edition)
+            if expect is None:
+                continue
+            for encoding, text in sorted(case.data.get("frames", {}).items()):
+                data = bytes.fromhex(text)
+                if len(data) > limit:
+                    too_large.append(f"{case.id} ({encoding})")
+                    continue
+                blocked = [e for e in effects.get(case.group, ()) if e not in allowed and "all" not in allowed]
+                if expect != "invalid" and (blocked or case.group in never):
+                    why = never.get(case.group) or f"effects not allowed: {', '.join(blocked)}"
+                    barred.setdefault(why, []).append(case.id)
+                    continue
+                out.append(Frame(case.id, encoding, expect, data))
+        skipped = []
+        if too_large:
+            skipped.append(f"{len(too_large)} frames over {limit} bytes (one datagram's limit): {', '.join(too_large[:4])}"
+                           + (" ..." if len(too_large) > 4 else ""))
+        for why, ids in barred.items():
+            skipped.append(f"{len(ids)} accepted frames of {', '.join(sorted({i.split('/')[1] for i in ids}))} ({why})")
+        return out, skipped

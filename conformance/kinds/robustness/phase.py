@@ -1,0 +1,353 @@
+"""The robustness phase, sans-IO: the target receives every frame of the corpus, then a burst of garbage, and must
+still answer every request kind it answered before.
+
+One machine runs the phase for every robustness case of the run (a batch): each case is a *probe*, a request
+kind and the reply that shows it is still served. The machine probes each once (baseline), sends the corpus
+frames in blocks (paced, readdressed to come from the session and go to the target, each case's defect kept),
+probes after each block, sends the garbage, probes again; a probe that goes unanswered names the block that
+silenced it, and when the session can restart the target the block is bisected down to the frame that does it.
+It is written as a generator that yields what it needs (send a frame, wait for a reply or a time, restart the
+target) so the sequence reads top to bottom; the driver below turns events into resumptions.
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass
+
+from ..scenario.exchanges import exchange_for
+from ..scenario.matchers import hashable, same
+from ..scenario.values import Scope, Unresolved, resolve_message
+from ..scenario.wire import Addressing, Composed, Parsed
+
+FLOOD_ENTITY = 254  # the entity the replayed frames come from, so replies to them never look like a probe's
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A frame to replay: the corpus case it comes from, its encoding and what the case expects of it."""
+
+    case_id: str
+    encoding: str
+    expect: str
+    data: bytes
+
+
+@dataclass
+class Phase:
+    """What every probe of one run shares: the frames, the settings (exchanges.json ``robustness``), the wire,
+    the exchange rules, the run's parameters and time scale, and whether the session can restart the target."""
+
+    frames: list[Frame]
+    skipped: list[str]  # why frames were left out (too large for a datagram, effects not allowed)
+    settings: dict
+    wire: object
+    exchanges: tuple
+    edition: str
+    params: dict
+    time_scale: float = 1.0
+    can_restart: bool = False
+
+    def machine(self, addressing: Addressing, unique, members) -> "PhaseMachine":
+        return PhaseMachine(self, list(members), addressing, unique)
+
+
+@dataclass(frozen=True)
+class ProbeProgram:
+    """One robustness case as a program of the phase's batch."""
+
+    case_id: str
+    case: dict
+    phase: Phase
+    exclusive: bool = True
+
+    @property
+    def batch(self) -> Phase:
+        return self.phase
+
+    @property
+    def wire(self):
+        return self.phase.wire
+
+    def resources(self) -> set[str]:
+        return {"*"}
+
+    def machine(self, addressing: Addressing, unique, members) -> "PhaseMachine":
+        return self.phase.machine(addressing, unique, members)
+
+
+@dataclass
+class Probe:
+    program: ProbeProgram
+    baseline: bool = False
+    silenced: str | None = None  # after what it stopped answering ("block 3 of 37 (frames ...)", "the garbage")
+    block: int | None = None
+    bisected: str | None = None
+
+
+@dataclass(frozen=True)
+class _Send:
+    composed: Composed
+
+
+@dataclass(frozen=True)
+class _Wait:
+    until: float
+    accepts: object = None  # Parsed -> bool, or None: only time ends the wait
+
+
+class _Restart:
+    pass
+
+
+class PhaseMachine:
+    def __init__(self, phase: Phase, members: list[ProbeProgram], addressing: Addressing, unique):
+        self.phase, self.addressing, self.unique = phase, addressing, unique
+        self.probes = [Probe(m) for m in members]
+        self.wire = phase.wire
+        self.keys: list = []
+        self.keys_seen = 0
+        self.timeline: list[dict] = []
+        self.frames_seen: list[dict] = []  # malformed frames the target sent (capped)
+        self.malformed = 0
+        self.t0 = self.now = 0.0
+        self.epoch = 0.0
+        self.done = False
+        self.restart_wanted = False
+        self.waiting: _Wait | None = None
+        self.error: str | None = None
+        self._script = None
+
+    # ------------------------------------------------------------------ driving the script
+
+    def start(self, t: float, epoch: float) -> list[Composed]:
+        self.t0 = t
+        self._script = self._run()
+        return self._resume(t, epoch, None)
+
+    @property
+    def deadline(self) -> float | None:
+        return None if self.done or self.waiting is None else self.waiting.until
+
+    def watches(self, parsed: Parsed) -> bool:
+        return False  # it claims nothing: a reply reaches it only by its echoed keys or its entity, or unowned
+
+    def deliver(self, t: float, epoch: float, parsed: Parsed, adopt: bool = False) -> list[Composed]:
+        if self.done:
+            return []
+        if parsed.problem is not None:
+            self.malformed += 1
+            if len(self.frames_seen) < self.phase.settings.get("malformed_listed", 20):
+                self.frames_seen.append({"n": len(self.frames_seen) + 1, "message": parsed.message,
+                                         "problem": parsed.problem, "clause": parsed.clause, "t": self._rel(t)})
+        if self.waiting is not None and self.waiting.accepts is not None and parsed.decoded is not None \
+                and self.waiting.accepts(parsed):
+            return self._resume(t, epoch, parsed)
+        return []
+
+    def wake(self, t: float, epoch: float) -> list[Composed]:
+        if self.done or self.waiting is None or t < self.waiting.until:
+            return []
+        return self._resume(t, epoch, None)
+
+    def restarted(self, t: float, epoch: float, problem: str | None) -> list[Composed]:
+        self.restart_wanted = False
+        return self._resume(t, epoch, problem)
+
+    def _resume(self, t: float, epoch: float, value) -> list[Composed]:
+        self.now, self.epoch, self.waiting = t, epoch, None
+        out = []
+        try:
+            while True:
+                item = self._script.send(value)
+                value = None
+                if isinstance(item, _Send):
+                    out.append(item.composed)
+                elif isinstance(item, _Wait):
+                    self.waiting = item
+                    return out
+                else:
+                    self.restart_wanted = True
+                    return out
+        except StopIteration:
+            self.done = True
+        return out
+
+    # ------------------------------------------------------------------ the phase, top to bottom
+
+    def _run(self):
+        settings, phase = self.phase.settings, self.phase
+        self._log("phase", f"{len(phase.frames)} corpus frames in blocks of {settings['block']}, then "
+                           f"{settings['garbage']} garbage datagrams; {len(self.probes)} probes"
+                  + "".join(f"; skipped {why}" for why in phase.skipped))
+        for probe in self.probes:
+            probe.baseline = yield from self._probe(probe, "baseline")
+        blocks = [phase.frames[i:i + settings["block"]] for i in range(0, len(phase.frames), settings["block"])]
+        for k, block in enumerate(blocks, 1):
+            if not self._listening():
+                self._log("phase", f"every probe is silenced: blocks {k} to {len(blocks)} not sent")
+                break
+            yield from self._replay(block)
+            self._log("block", f"block {k} of {len(blocks)} sent: {_span(block)}")
+            for probe in self._listening():
+                if not (yield from self._probe(probe, f"after block {k}")):
+                    probe.silenced, probe.block = f"block {k} of {len(blocks)} ({_span(block)})", k - 1
+        if self._listening():
+            rng = random.Random(settings["seed"])
+            source = (self.addressing.system, FLOOD_ENTITY)
+            for data in self.wire.garbage(rng, settings["garbage"], source, self._node()):
+                yield _Send(Composed(data, {}, "", None))
+                yield _Wait(self.now + self._scaled(settings["garbage_pace"]))
+            yield _Wait(self.now + self._scaled(settings["settle"]))
+            self._log("garbage", f"{settings['garbage']} garbage datagrams sent (seed {settings['seed']})")
+            for probe in self._listening():
+                if not (yield from self._probe(probe, "after the garbage")):
+                    probe.silenced = f"the {settings['garbage']} garbage datagrams"
+        silenced = sorted({p.block for p in self.probes if p.block is not None})
+        if silenced and self.phase.can_restart:
+            for k in silenced:
+                yield from self._bisect(blocks[k], [p for p in self.probes if p.block == k])
+            problem = yield _Restart()  # leave the target as it was found
+            self._log("restart", "restarted to leave the target running" if problem is None else problem)
+
+    def _listening(self) -> list[Probe]:
+        return [p for p in self.probes if p.baseline and p.silenced is None]
+
+    def _replay(self, frames: list[Frame]):
+        pace, source = self._scaled(self.phase.settings["pace"]), (self.addressing.system, FLOOD_ENTITY)
+        for frame in frames:
+            data = self.wire.readdress(frame.data, frame.encoding, source, self._node())
+            yield _Send(Composed(data, {}, "", frame.encoding))
+            yield _Wait(self.now + pace)
+        yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
+
+    def _bisect(self, block: list[Frame], probes: list[Probe]):
+        """Restart, replay half of the block, probe; keep the half that silences a probe, down to one frame."""
+        candidates = block
+        while True:
+            problem = yield _Restart()
+            if problem is not None:
+                self._log("restart", f"cannot bisect: {problem}")
+                return
+            yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
+            half = candidates[:max(1, len(candidates) // 2)] if len(candidates) > 1 else candidates
+            yield from self._replay(half)
+            silent = False
+            for probe in probes:
+                if not (yield from self._probe(probe, f"bisecting: after {_span(half)}")):
+                    silent = True
+            if len(candidates) == 1:
+                what = (f"the frame {_name(half[0])} alone silences it" if silent else
+                        f"no single frame does it alone: the block as a whole does (last candidate {_name(half[0])})")
+                for probe in probes:
+                    probe.bisected = what
+                self._log("bisect", what)
+                return
+            candidates = half if silent else candidates[len(half):]
+
+    # ------------------------------------------------------------------ probing
+
+    def _probe(self, probe: Probe, when: str):
+        """Ask once (and again, up to the probe's tries) and wait for the reply that shows the kind is served."""
+        spec = probe.program.case["probe"]
+        tries = spec.get("tries", 2)
+        for attempt in range(1, tries + 1):
+            accepts, composed = self._ask(probe, spec)
+            if composed is not None:
+                yield _Send(composed)
+            got = yield _Wait(self.now + self._scaled(spec["within"]), accepts)
+            if got is not None:
+                self._log("probe", f"{when}: {got.message} received" + (f" (try {attempt})" if attempt > 1 else ""),
+                          probe)
+                return True
+        self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within {spec['within']} s "
+                           f"({tries} tries)", probe)
+        return False
+
+    def _ask(self, probe: Probe, spec: dict):
+        """(what accepts the reply, the request to send or None) for one try of a probe."""
+        if "alive" in spec:
+            wanted = spec["alive"]
+            return (lambda p: (wanted is None or p.message == wanted) and self._from_node(p)), None
+        scope = Scope(dict(self.phase.params), self.unique, self.epoch,
+                      addresses={"system": self.addressing.system, "node": self.addressing.node})
+        try:
+            message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
+        except Unresolved as exc:
+            self.error = str(exc)
+            return (lambda p: False), None
+        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, self.epoch)
+        exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
+        echoes = [(r["reply_field"], composed.decoded["fields"].get(r["request_field"]))
+                  for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo"]
+        if echoes:
+            self.keys.append((spec["expect"], tuple((f, hashable(v)) for f, v in echoes)))
+        me = (self.addressing.system, self.addressing.entity)
+
+        def accepts(p: Parsed) -> bool:
+            if p.message != spec["expect"] or not self._from_node(p):
+                return False
+            if echoes:
+                return all(same(p.fields.get(f), v) for f, v in echoes)
+            return tuple(self.wire.destination(p) or ()) == me
+        return accepts, composed
+
+    def _from_node(self, parsed: Parsed) -> bool:
+        origin = self.wire.origin(parsed)
+        return origin is None or self.addressing.node is None or origin[0] == self.addressing.node
+
+    def _node(self) -> int:
+        return 0xFFFF if self.addressing.node is None else self.addressing.node
+
+    # ------------------------------------------------------------------ what it found
+
+    def record(self, member: int) -> dict:
+        probe = self.probes[member]
+        case = probe.program.case
+        clause, level = case["clause"], case.get("level", "MUST")
+        what = case["probe"].get("expect") or case["probe"].get("alive") or "a frame"
+        if self.error:
+            findings = []
+        elif not probe.baseline:
+            findings = [{"check": "baseline", "passed": False, "inconclusive": True, "level": level, "clause": clause,
+                         "detail": f"no {what} before the robustness phase either: its scenarios judge that; whether "
+                                   "the target survives the corpus cannot be told from this probe"}]
+        else:
+            corpus = probe.block is None
+            garbage_ok = probe.silenced is None
+            findings = [{"check": "baseline", "passed": True, "level": level, "clause": clause,
+                         "detail": f"{what} received before the robustness phase"}]
+            skipped = f" ({'; '.join(self.phase.skipped)} left out)" if self.phase.skipped else ""
+            detail = (f"{what} still received after each block of {len(self.phase.frames)} corpus frames{skipped}" if corpus else
+                      f"no {what} after {probe.silenced}" + (f"; bisected: {probe.bisected}" if probe.bisected else
+                                                              "; give --restart-cmd to bisect to the frame"))
+            findings.append({"check": "corpus", "passed": corpus, "level": level, "clause": clause, "detail": detail})
+            if corpus:
+                findings.append({"check": "garbage", "passed": garbage_ok, "level": level, "clause": clause,
+                                 "detail": f"{what} still received after the garbage burst" if garbage_ok
+                                 else f"no {what} after {probe.silenced}"})
+        timeline = [e for e in self.timeline if e.get("probe") in (None, member)]
+        return {"findings": findings, "timeline": [{k: v for k, v in e.items() if k != "probe"} for e in timeline],
+                "frames": self.frames_seen if member == 0 else [], "error": self.error}
+
+    def _log(self, event: str, note: str, probe: Probe | None = None) -> None:
+        entry = {"t": self._rel(self.now), "event": event, "note": note}
+        if probe is not None:
+            entry["probe"] = self.probes.index(probe)
+        self.timeline.append(entry)
+
+    def _rel(self, t: float) -> float:
+        return round(t - self.t0, 3)
+
+    def _scaled(self, seconds: float) -> float:
+        return float(seconds) * self.phase.time_scale
+
+
+def _name(frame: Frame) -> str:
+    return f"{frame.case_id} ({frame.encoding}, {frame.expect})"
+
+
+def _span(frames: list[Frame]) -> str:
+    if len(frames) == 1:
+        return _name(frames[0])
+    return f"{len(frames)} frames, {_name(frames[0])} to {_name(frames[-1])}"

@@ -1,0 +1,143 @@
+"""What ``run`` needs for live cases (scenarios and the robustness phase), whatever the suite: the run's options
+checked against the suite's vocabulary, the notes a report gives on them, ``--dry-run``, ``list --scenarios``,
+and opening a ``--target`` with an optional ``--restart-cmd``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import subprocess
+from pathlib import Path
+
+from .kinds.scenario import options as vocabulary
+from .render.common import printable
+
+RESTART_TIMEOUT = 120.0  # seconds a --restart-cmd may take
+LIVE_FLAGS = ("target", "param", "allow_effects", "claims", "profile", "robustness", "restart_cmd", "dry_run")
+
+
+def system_id(text: str) -> int:
+    """An IMC-style numeric id for --src/--dst (argparse type)."""
+    try:
+        value = int(text, 0)
+    except ValueError:
+        value = -1
+    if not 0 <= value < 0xFFFF:
+        raise argparse.ArgumentTypeError(f"{text!r}: an id is 0 to 0xFFFE (decimal or 0x hex)")
+    return value
+
+
+def options(args, suite, everything) -> dict:
+    """The run's settings the live case kinds read; {} for a suite without live cases (a ValueError if live
+    options were given to it anyway)."""
+    behaviour = suite.behaviour
+    if behaviour is None:
+        given = [f"--{f.replace('_', '-')}" for f in LIVE_FLAGS if getattr(args, f)] + (
+            ["--time-scale"] if args.time_scale != 1.0 else [])
+        if given:
+            raise ValueError(f"the suite {suite.name!r} has no live cases: {', '.join(given)} do not apply")
+        return {}
+    out = {"params": vocabulary.parameters(behaviour, args.param),
+           "effects": vocabulary.effects(behaviour, args.allow_effects),
+           "time_scale": args.time_scale, "profile": suite.profile(args.profile or "seed"),
+           "robustness": args.robustness, "restart": bool(args.restart_cmd),
+           "corpus": tuple(c for c in everything if c.kind == "vector")}
+    if args.restart_cmd is not None:
+        restart_argv(args.restart_cmd)
+    if args.claims:
+        from .files import read_json
+        try:
+            _, doc = read_json(Path(args.claims))
+            out["claims"] = vocabulary.claims(behaviour, doc)
+        except ValueError as exc:
+            raise ValueError(f"--claims {args.claims}: {exc}") from exc
+    return out
+
+
+def notes(args, options: dict) -> list[str]:
+    """What the report says the live cases ran under (a run against a live target)."""
+    if not options or not args.target:
+        return []
+    out = [f"profile: {options['profile']['name']}"]
+    if "claims" in options:
+        out.append(f"claims ({args.claims}): {', '.join(sorted(options['claims'])) or 'no service'}")
+    if options["params"]:
+        out.append("parameters: " + ", ".join(f"{k}={v}" for k, v in options["params"].items()))
+    if options["effects"]:
+        out.append(f"effects allowed: {', '.join(sorted(options['effects']))}")
+    if options["time_scale"] != 1.0:
+        out.append(f"time bounds scaled by {options['time_scale']:g}")
+    return out
+
+
+def dry_run(suite, cases, args, options) -> int:
+    """Print what each selected live case would send, and send nothing."""
+    from .kinds.scenario import Addressing
+    from .kinds.scenario.dryrun import planned_sends
+
+    addressing = Addressing(args.src, 0, args.dst)
+    for case in cases:
+        kind = suite.kinds[case.kind]
+        if not hasattr(kind, "admit"):
+            continue
+        why = kind.admit(case.data, options)
+        plans = [] if why else kind.plan(case.data, args.edition, set(suite.encodings), options)
+        if why or not plans or plans[0].op == "skip":
+            print(f"{case.id}: not run ({why or (plans[0].params['reason'] if plans else 'not in this edition')})")
+            continue
+        for step, sent in planned_sends(plans[0].params["program"], addressing, 0.0):
+            text = sent if isinstance(sent, str) else json.dumps({k: v for k, v in sent.items() if k != "header"})
+            print(f"{case.id} {step}: {printable(text)}")
+    return 0
+
+
+def list_live_cases(suite, cases) -> int:
+    """``list --scenarios``: the live cases with what they need, do and exercise, then the vocabulary."""
+    behaviour = suite.behaviour
+    if behaviour is None:
+        raise ValueError(f"the suite {suite.name!r} has no live cases")
+    for case in (c for c in cases if hasattr(suite.kinds[c.kind], "admit")):
+        d = case.data
+        print(f"{case.id}\tneeds: {','.join(d.get('needs', ())) or '-'}\teffects: {','.join(d.get('effects', ())) or '-'}"
+              f"\tservice: {d.get('service', '-')}\t{d['clause']}")
+    print("# parameters (--param NAME=VALUE):")
+    for name, p in behaviour["params"].items():
+        print(f"#   {name}: {p['description']} ({p['type']}, e.g. {p['example']})")
+    print(f"# effects (--allow-effects all or a list): {', '.join(behaviour['effects'])}")
+    print(f"# services (--claims FILE): {', '.join(behaviour['services'])}")
+    return 0
+
+
+def open_target(args, suite):
+    """The session with ``--target``; ValueError with a one-line reason."""
+    restart = restarter(restart_argv(args.restart_cmd)) if args.restart_cmd is not None else None
+    return suite.open_target(args.target, bind=args.bind, src=args.src, dst=args.dst,
+                             allow_group=args.allow_multicast, startup=args.startup, restart=restart)
+
+
+def restart_argv(text: str) -> list[str]:
+    try:
+        argv = shlex.split(text)
+    except ValueError as exc:
+        raise ValueError(f"--restart-cmd cannot be split: {exc}") from None
+    if not argv:
+        raise ValueError("--restart-cmd is empty (an unset variable?): give the command that restarts the target")
+    return argv
+
+
+def restarter(argv: list[str]):
+    """A function that runs the restart command (no shell, bounded) and says why it failed, or None."""
+    def restart() -> str | None:
+        try:
+            done = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, timeout=RESTART_TIMEOUT,
+                                  start_new_session=True)
+        except subprocess.TimeoutExpired:
+            return f"the restart command did not end within {RESTART_TIMEOUT:g} s"
+        except OSError as exc:
+            return f"the restart command could not run: {exc.strerror or exc}"
+        if done.returncode != 0:
+            tail = done.stderr[-300:].decode("utf-8", "replace").strip()
+            return f"the restart command exited with {done.returncode}" + (f": {printable(tail)}" if tail else "")
+        return None
+    return restart
