@@ -3,6 +3,8 @@
 A library adapter is any object with ``hello() -> dict``, ``encode(suite, message, encoding) -> bytes``
 and ``decode(suite, frame, **params) -> dict`` (messages in the suite's decoded form; ``params`` are the
 suite's, e.g. a ROS ``type``), and, where a suite checks definitions, ``describe(suite, **params) -> dict``.
+A handler of a suite's services (run by its scenarios) has ``setup(suite, service, state)``, ``call(suite,
+service, request) -> dict`` (the response) and ``publish(suite, type, message)``.
 It refuses an input by raising ``Rejected``; it declares a capability absent by raising ``Unsupported``.
 Any other exception is an adapter error, never a pass.
 """

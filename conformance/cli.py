@@ -94,7 +94,9 @@ def adapter_arguments(args) -> dict[str, str]:
 
 
 def open_session(name: str, argv: list[str] | None, args, suite):
-    """The session for the chosen adapter: a subprocess when there is an argv, else a library adapter."""
+    """The session for the chosen adapter: a subprocess when there is an argv, else a library adapter; either
+    also runs the scenarios of a handler it calls (sessions/calls.py)."""
+    from .sessions.calls import CallTarget
     from .sessions.library import LibrarySession
 
     if argv is not None:
@@ -102,10 +104,10 @@ def open_session(name: str, argv: list[str] | None, args, suite):
 
         if args.adapter_arg:
             raise UsageError("--adapter-arg is for library adapters; a subprocess adapter takes its own arguments")
-        return SubprocessSession(argv, name=name, encoding_param=suite.encoding_param, timeout=args.timeout,
-                                 hello_timeout=max(30.0, args.timeout),  # start-up (a JVM, class generation) takes longer
-                                 memory_limit=args.memory_limit * 1024 * 1024)
-    return LibrarySession(load_library_adapter(name, suite, adapter_arguments(args)), name)
+        return CallTarget(SubprocessSession(argv, name=name, encoding_param=suite.encoding_param, timeout=args.timeout,
+                                            hello_timeout=max(30.0, args.timeout),  # start-up (a JVM, class generation) takes longer
+                                            memory_limit=args.memory_limit * 1024 * 1024))
+    return CallTarget(LibrarySession(load_library_adapter(name, suite, adapter_arguments(args)), name))
 
 
 def selection(args):

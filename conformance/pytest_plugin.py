@@ -63,9 +63,10 @@ _STATE = pytest.StashKey[dict]()
 def run_selected(state: dict, cases) -> dict:
     """Case id -> CaseResult for ``cases``, run through the runner."""
     from .core.runner import run_cases
+    from .sessions.calls import CallTarget
     from .sessions.library import LibrarySession
 
-    session = LibrarySession(state["adapter"], state["spec"])
+    session = CallTarget(LibrarySession(state["adapter"], state["spec"]))
     try:
         result = run_cases(session, state["suite"], cases, edition=state["edition"], adapter=state["spec"],
                            strict=state["strict"])

@@ -25,13 +25,15 @@ def program(mode: str) -> str:
 
 def test_the_committed_corpus_is_what_the_generator_builds():
     built = build_corpus(load_definitions())
-    committed = {p.relative_to(ros_data()).as_posix() for p in ros_data("cases").glob("*.json")} | {"coverage.md"}
+    committed = {p.relative_to(ros_data()).as_posix() for p in ros_data("cases").glob("*.json")} | {
+        "coverage.md", "behaviour-coverage.md"}
     assert set(built) == committed
     assert [name for name, text in built.items() if ros_data(name).read_text(encoding="utf-8") != text] == []
 
 
 def test_every_type_has_cases_of_every_kind_and_a_definition_check_per_edition():
     suite, cases = open_corpus("ros_acomms")
+    cases = [c for c in cases if c.kind == "vector"]
     assert len({c.group for c in cases}) == 38 == len(suite.groups)
     for group in suite.groups:
         mine = [c.data for c in cases if c.group == group.name]

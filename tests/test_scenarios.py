@@ -189,10 +189,8 @@ def test_every_testable_statement_is_covered_and_every_live_case_covers_one(suit
 
 
 def test_a_step_may_not_cover_an_unknown_or_untestable_statement(suite, cases):
-    from imc_conformance.suites.imc.suite import scenario_problem
-
     case = next(c.data for c in cases if c.id == "imc/LblConfig/scenario/get-cfg")
     for sid, why in (("LblConfig.nothing", "not a statement"), ("LblRange.notify", "marked untestable")):
         broken = dict(case, steps=[dict(case["steps"][0]), dict(case["steps"][1], covers=[sid])])
-        problem = scenario_problem(suite, broken)
+        problem = suite.live_problem("scenario", broken)
         assert problem is not None and problem[0] == ".steps[1].covers[0]" and why in problem[1]

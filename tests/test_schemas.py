@@ -32,7 +32,8 @@ CASE_FILES = sorted((IMC / "cases").glob("*.json"))
 def schema_name_for(path: Path) -> str:
     """Which schema a data file follows: imc/cases/*.json are IMC vector files, */scenarios/*.json scenario files,
     */profiles/*.json profiles, imc/<name>.json follow <name>;
-    ros_acomms/cases/*.json follow ros_acomms-vectors, ros_acomms/rules.json the shared rules schema, and
+    ros_acomms/cases/*.json follow ros_acomms-vectors, ros_acomms/{rules,exchanges,statements}.json the shared
+    schemas, and
     ros_acomms/<name>.json ros_acomms-<name>."""
     if path.parent == IMC / "cases":
         return "vectors"
@@ -44,8 +45,8 @@ def schema_name_for(path: Path) -> str:
         return path.stem
     if path.parent == ROS / "cases":
         return "ros_acomms-vectors"
-    if path.parent == ROS and path.stem == "rules":
-        return "rules"
+    if path.parent == ROS and path.stem in ("rules", "exchanges", "statements"):
+        return path.stem
     if path.parent == ROS and f"ros_acomms-{path.stem}" in SCHEMA_NAMES:
         return f"ros_acomms-{path.stem}"
     raise LookupError(f"no schema for {path}")

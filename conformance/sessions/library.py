@@ -1,9 +1,10 @@
 """Drive a library adapter (an in-process Python object) through the requests of a run.
 
 The adapter has ``hello()``, ``encode(suite, message, encoding)``, ``decode(suite, frame, **params)`` and,
-for suites that describe their types, ``describe(suite, **params)``; it refuses with ``Rejected`` and
-declares a capability absent with ``Unsupported`` (``imc_conformance.adapter_api``). Anything else it
-raises is an adapter error, never a pass.
+for suites that describe their types, ``describe(suite, **params)``; a handler of a suite's services (whose
+scenarios call it) has ``setup(suite, service, state)``, ``call(suite, service, request)`` (the response)
+and ``publish(suite, type, message)``. It refuses with ``Rejected`` and declares a capability absent with
+``Unsupported`` (``imc_conformance.adapter_api``). Anything else it raises is an adapter error, never a pass.
 """
 
 from __future__ import annotations
@@ -14,8 +15,9 @@ from ..adapter_api import Rejected, Unsupported
 from ..core.session import AdapterStartError, Answer, Job, Request
 
 
-def _call(fn, *args, **kwargs) -> Answer:
-    """Call the adapter; any exception other than Rejected/Unsupported is an adapter error."""
+def _call(fn, *args, acknowledge: bool = False, **kwargs) -> Answer:
+    """Call the adapter; any exception other than Rejected/Unsupported is an adapter error. ``acknowledge``:
+    the operation answers nothing but its success (None)."""
     try:
         result = fn(*args, **kwargs)
     except Rejected as exc:
@@ -24,6 +26,8 @@ def _call(fn, *args, **kwargs) -> Answer:
         return Answer("unsupported", reason=str(exc))
     except Exception as exc:  # an adapter bug must never pass a case
         return Answer("adapter-error", reason=f"{type(exc).__name__}: {exc}")
+    if acknowledge and result is None:
+        return Answer("ok", message={})
     if isinstance(result, dict):
         return Answer("ok", message=result)
     if isinstance(result, (bytes, bytearray, memoryview)):
@@ -67,6 +71,10 @@ class LibrarySession:
                     yield job, self._encode(job.suite, answer.message, request) if answer.kind == "ok" else answer
             elif request.op == "encode":
                 yield job, self._encode(job.suite, request.message, request)
+            elif request.op in ("setup", "call", "publish"):
+                method = getattr(self.adapter, request.op, None)
+                yield job, (_call(method, job.suite, acknowledge=request.op != "call", **request.params) if method
+                            else Answer("unsupported", reason=f"the adapter has no {request.op} operation"))
             else:
                 describe = getattr(self.adapter, "describe", None)
                 yield job, (_call(describe, job.suite, **request.params) if describe is not None

@@ -10,7 +10,10 @@ its stdin; the program answers each with one line on its stdout, matched by ``id
 * ``{"id": 3, "op": "decode", "suite": "imc", "frame": "<hex>"}`` (plus the suite's parameters, e.g. a ROS
   ``type``) -> ``{"id": 3, "ok": true, "message": {...}}``;
 * ``{"id": 4, "op": "describe", "suite": "ros_acomms", "type": "..."}`` -> ``{"id": 4, "ok": true, ...}``
-  (the type's description, for suites that check definitions).
+  (the type's description, for suites that check definitions);
+* for handlers of a suite's services, run by its scenarios: ``{"op": "setup", "service": ..., "state": {...}}``
+  and ``{"op": "publish", "type": ..., "message": {...}}`` -> ``{"ok": true}``; ``{"op": "call", "service":
+  ..., "request": {...}}`` -> ``{"ok": true, "response": {...}}``.
 
 A refusal is ``{"id": N, "ok": false, "error": "invalid CRC", "rule": "crc"}`` (``rule`` optional).
 ``"unsupported": true`` declares the capability absent. ``"ok": false, "internal": true`` says the
@@ -234,8 +237,8 @@ def _first_call(job: Job, encoding_param: str) -> _Call:
     request = job.request
     if request.op == "encode":
         return _Call(job, {"op": "encode", "suite": job.suite, "message": request.message, encoding_param: request.encoding})
-    if request.op == "describe":
-        return _Call(job, {"op": "describe", "suite": job.suite, **request.params})
+    if request.op in ("describe", "setup", "call", "publish"):
+        return _Call(job, {"op": request.op, "suite": job.suite, **request.params})
     body = {"op": "decode", "suite": job.suite, "frame": request.frame, **request.params}
     return _Call(job, body, then_encode=request.op == "roundtrip")
 
@@ -260,6 +263,11 @@ def _answer(op: str, reply: dict) -> Answer:
         return Answer("ok", message=message) if isinstance(message, dict) else _malformed("no 'message' object", reply)
     if op == "describe":
         return Answer("ok", message={k: v for k, v in reply.items() if k not in ("id", "ok")})
+    if op == "call":
+        message = reply.get("response")
+        return Answer("ok", message=message) if isinstance(message, dict) else _malformed("no 'response' object", reply)
+    if op in ("setup", "publish"):
+        return Answer("ok", message={})
     try:
         return Answer("ok", frame=bytes.fromhex(reply["frame"]))
     except (KeyError, TypeError, ValueError):

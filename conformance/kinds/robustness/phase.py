@@ -276,7 +276,8 @@ class PhaseMachine:
         except Unresolved as exc:
             self.error = str(exc)
             return (lambda p: False), None
-        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, self.epoch)
+        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, self.epoch, "probe",
+                                     self.phase.edition)
         exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
         echoes = [(r["reply_field"], composed.decoded["fields"].get(r["request_field"]))
                   for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo"]

@@ -20,7 +20,8 @@ def planned_sends(program: Program, addressing: Addressing, epoch: float) -> lis
             continue
         try:
             message = resolve_message(step["send"], scope, program.wire, program.edition)
-            composed = program.wire.compose(message, step.get("encoding"), addressing, epoch)
+            composed = program.wire.compose(message, step.get("encoding"), addressing, epoch, step["id"],
+                                            program.edition)
         except (Unresolved, ValueError) as exc:
             out.append((step["id"], f"cannot be built before the run: {exc}"))
             continue

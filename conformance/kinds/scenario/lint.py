@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from .machine import Program
 from .matchers import is_matcher
-from .values import Scope, Unresolved, resolve_matcher, resolve_message
+from .values import Scope, Unresolved, resolve_matcher, resolve_message, resolve_plain
 from .wire import Addressing
 
 WAITS = ("expect", "sequence", "silence", "alive")
@@ -51,13 +51,25 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of):
         if step["id"] in seen:
             return where + ".id", f"the step id {step['id']!r} appears twice"
         seen.add(step["id"])
+        if ("setup" in step or "accepted" in step) and wire.transport != "call":
+            return where, "setup and accepted steps are for handlers called through an adapter, not a live target"
+        if "setup" in step:
+            try:
+                resolve_plain(step["setup"]["state"], scope)
+            except Unresolved as exc:
+                return where + ".setup.state", str(exc)
+            continue
+        if "accepted" in step:
+            if step["accepted"] not in sends:
+                return where + ".accepted", f"{step['accepted']!r} is not an earlier send step"
+            continue
         if "send" in step:
             message = step["send"]
             if not known(message["abbrev"]):
                 return where + ".send.abbrev", f"unknown message {message['abbrev']!r}"
             try:
                 resolved = resolve_message(message, scope, wire, edition)
-                composed = wire.compose(resolved, step.get("encoding"), Addressing(1, 1, 2), 0.0)
+                composed = wire.compose(resolved, step.get("encoding"), Addressing(1, 1, 2), 0.0, step["id"], edition)
             except (Unresolved, KeyError, ValueError) as exc:
                 return where + ".send", f"cannot be sent in {edition}: {exc}"
             scope.sent[step["id"]] = composed.decoded.get("fields", {})
@@ -92,4 +104,6 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of):
                     return f"{where}.{key}.{name}", f"{exc}"
                 if is_matcher(spec) and "one_of" in spec and not resolve_matcher(spec, message, name, scope, wire, edition)["one_of"]:
                     return f"{where}.{key}.{name}", f"no value of one_of exists in {edition}"
+        if message is not None and kind in ("expect", "sequence"):
+            scope.replies[step["id"]] = wire.example(message, edition)  # what a later step's $reply reads
     return None

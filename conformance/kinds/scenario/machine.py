@@ -15,10 +15,10 @@ from dataclasses import asdict, dataclass, field
 
 from .exchanges import exchange_for, resolved
 from .matchers import hashable, mismatch, same, show
-from .values import Scope, Unresolved, resolve_matcher, resolve_message
+from .values import Scope, Unresolved, resolve_matcher, resolve_message, resolve_plain
 from .wire import Addressing, Composed, Parsed, Wire
 
-STEP_KINDS = ("send", "expect", "sequence", "silence", "alive", "wait")
+STEP_KINDS = ("send", "setup", "expect", "sequence", "silence", "alive", "wait", "accepted")
 
 
 @dataclass(frozen=True)
@@ -101,6 +101,7 @@ class Machine:
         self.keys: list[tuple] = []  # (reply message, ((field, value), ...)) its requests gave replies to echo
         self.keys_seen = 0  # how many of keys the conductor has registered
         self.backlog: list[Parsed] = []  # replies to a request a later step awaits
+        self.acks: dict[str, str | None] = {}  # send or setup step -> why the target refused its call, or None
         self.t0 = 0.0
         self.index = -1
         self.step: _Step | None = None
@@ -189,12 +190,15 @@ class Machine:
             spec = steps[self.index]
             kind = next(k for k in STEP_KINDS if k in spec)
             self.step = _Step(spec, kind)
-            if kind == "send":
+            if kind in ("send", "setup"):
                 try:
-                    out.append(self._send(t, epoch, spec))
+                    out.append(self._send(t, epoch, spec) if kind == "send" else self._setup(t, spec))
                 except Unresolved as exc:
                     self.error = str(exc)
                     self._stop(t, str(exc))
+                continue
+            if kind == "accepted" and spec["accepted"] in self.acks:
+                self._on_accepted(t, self.step, self.acks[spec["accepted"]])
                 continue
             bound = spec.get("within", spec.get("for", spec.get("wait")))
             self.step.until = t + self._bound(bound)
@@ -219,10 +223,42 @@ class Machine:
                 return step_id
         return None
 
+    def acknowledge(self, t: float, epoch: float, step_id: str, problem: str | None) -> list[Composed]:
+        """The target acknowledged the call a send or setup step made (``problem``: why it refused, or None)."""
+        if self.done:
+            return []
+        self.acks[step_id] = problem
+        self.timeline.append({"t": self._rel(t), "event": "acknowledged" if problem is None else "refused",
+                              "step": step_id, **({"note": problem} if problem else {})})
+        kind = next((k for k in STEP_KINDS if k in self._spec(step_id)), None)
+        if problem is not None and kind == "setup":
+            self.error = f"the target refused to set up step {step_id}: {problem}"
+            self._stop(t, self.error)
+            return []
+        step = self.step
+        if step is not None and step.kind == "accepted" and step.spec["accepted"] == step_id:
+            self._on_accepted(t, step, problem)
+            return self._advance(t, epoch)
+        return []
+
+    def _on_accepted(self, t: float, step: _Step, problem: str | None) -> None:
+        ref = step.spec["accepted"]
+        self._find(step, "", problem is None, f"step {ref}'s call was accepted" if problem is None
+                   else f"step {ref}'s call was refused: {problem}")
+
+    def _spec(self, step_id: str) -> dict:
+        return next(s for s in self.program.scenario["steps"] if s["id"] == step_id)
+
+    def _setup(self, t: float, spec: dict) -> Composed:
+        setup = spec["setup"]
+        composed = self.wire.setup(setup["service"], resolve_plain(setup["state"], self.scope), spec["id"])
+        self.timeline.append({"t": self._rel(t), "event": "setup", "step": spec["id"], **self.wire.present(composed)})
+        return composed
+
     def _send(self, t: float, epoch: float, spec: dict) -> Composed:
         self.scope.epoch = epoch
         message = resolve_message(spec["send"], self.scope, self.wire, self.edition)
-        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, epoch)
+        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, epoch, spec["id"], self.edition)
         self.sent[spec["id"]] = composed
         self.scope.sent[spec["id"]] = composed.decoded.get("fields", {})
         exchange = self.program.exchange_for(message)
@@ -238,7 +274,7 @@ class Machine:
             return len(step.replies) >= step.spec.get("count", 1) or bool(step.failures)
         if step.kind == "alive":
             return bool(step.replies)
-        return False  # sequence, silence and wait end at their deadline
+        return False  # sequence, silence and wait end at their deadline; accepted at its acknowledgement
 
     def _must_failed(self) -> bool:
         return any(not f.passed and f.level == "MUST" for f in self.findings)
@@ -306,7 +342,7 @@ class Machine:
             except Unresolved as exc:
                 problems.append(f"{path}: {exc}")
                 continue
-            why = mismatch(parsed.fields.get(path), resolved, lambda v: self.wire.size_of(message, path, v))
+            why = mismatch(parsed.fields.get(path), resolved, lambda v: self.wire.size_of(message, path, v), parsed.fields)
             if why:
                 problems.append(f"{path} {why}")
         return "; ".join(problems) or None
@@ -375,13 +411,17 @@ class Machine:
             self._find(step, "", got == 0, f"nothing for {bound} s" if not got else f"{got} {spec['silence']} received")
         elif kind == "sequence":
             self._judge_sequence(step, bound)
+        elif kind == "accepted":
+            self._find(step, "", False, f"step {spec['accepted']}'s call was not acknowledged within {bound} s")
         else:
             wanted = spec.get("expect") or spec.get("alive") or "a frame"
             got = len(step.replies)
             what = f"{got} of {spec.get('count', 1)} {wanted}" if got else f"no {wanted}"
             tries = f" ({step.tries} tries)" if step.tries > 1 else ""
             malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
-            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}")
+            refused = self.acks.get(spec.get("reply_to"))
+            refused = f"; the call was refused: {refused}" if refused else ""
+            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}{refused}")
         self.timeline.append({"t": self._rel(t), "event": "timer", "step": spec["id"], "note": "the step's time is up"})
 
     def _judge_sequence(self, step: _Step, bound) -> None:

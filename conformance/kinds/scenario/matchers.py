@@ -1,12 +1,14 @@
 """Field matchers of scenario steps, as data: what a received value must be.
 
 A matcher is a plain value (must equal it) or an object with one of these keys: ``equal``, ``one_of``
-(a list), ``range`` (``[min, max]``, either null for no bound, inclusive), ``any``, ``present`` (not
+(a list), ``none_of`` (a list it must equal none of), ``range`` (``[min, max]``, either null for no bound,
+inclusive), ``any``, ``present`` (not
 null), ``null``, ``pattern`` (a regular expression the whole text matches), ``contains_item`` (a
-``separator``-separated text list holds the item; ``","`` by default), ``contains_message`` and
+``separator``-separated text list, or a list, holds the item; ``","`` by default), ``contains_message`` and
 ``lacks_message`` (an inline message anywhere inside: a name, or ``{"abbrev", "fields"}`` whose fields it
 must hold among its own), ``encoded_at_most`` (the value takes at most that many bytes on the wire, as the
-suite's wire counts them), ``all_of`` (a list of matchers, each must hold). Values are already resolved (enum names to numbers, parameters to their values)
+suite's wire counts them), ``bits_within`` and ``bits_below`` (a number of bits at most, or below, 8 times
+the bytes of a sibling field named by the matcher), ``all_of`` (a list of matchers, each must hold). Values are already resolved (enum names to numbers, parameters to their values)
 when they reach ``mismatch``.
 """
 
@@ -15,22 +17,35 @@ from __future__ import annotations
 import math
 import re
 
-KEYS = ("equal", "one_of", "range", "any", "present", "null", "pattern", "contains_item", "contains_message",
-        "lacks_message", "encoded_at_most", "all_of")
+KEYS = ("equal", "one_of", "none_of", "range", "any", "present", "null", "pattern", "contains_item",
+        "contains_message", "lacks_message", "encoded_at_most", "bits_within", "bits_below", "all_of")
 
 
 def is_matcher(spec) -> bool:
     return isinstance(spec, dict) and len(set(spec) & set(KEYS)) == 1 and set(spec) <= {*KEYS, "separator"}
 
 
-def mismatch(value, spec, size_of=None) -> str | None:
-    """Why ``value`` does not satisfy ``spec``, or None; ``size_of(value)``: its size on the wire in bytes."""
+def mismatch(value, spec, size_of=None, siblings: dict | None = None) -> str | None:
+    """Why ``value`` does not satisfy ``spec``, or None; ``size_of(value)``: its size on the wire in bytes;
+    ``siblings``: the other fields of the message it is in."""
     if not is_matcher(spec):
         return None if same(value, spec) else f"{show(value)}, expected {show(spec)}"
     if "equal" in spec:
         return None if same(value, spec["equal"]) else f"{show(value)}, expected {show(spec['equal'])}"
     if "all_of" in spec:
-        return "; ".join(filter(None, (mismatch(value, m, size_of) for m in spec["all_of"]))) or None
+        return "; ".join(filter(None, (mismatch(value, m, size_of, siblings) for m in spec["all_of"]))) or None
+    if "none_of" in spec:
+        taken = any(same(value, v) for v in spec["none_of"])
+        return f"{show(value)}, expected none of {', '.join(show(v) for v in spec['none_of'])}" if taken else None
+    if "bits_within" in spec or "bits_below" in spec:
+        name = spec.get("bits_within") or spec.get("bits_below")
+        data = (siblings or {}).get(name)
+        if not isinstance(data, str) or not isinstance(value, int) or isinstance(value, bool):
+            return f"{show(value)} cannot be compared with the bits of {name} ({show(data)})"
+        bits = 4 * len(data)  # the sibling is bytes as hex
+        if "bits_within" in spec:
+            return None if value <= bits else f"{value} bits, more than the {bits} bits of {name}"
+        return None if value < bits else f"{value} bits, not less than the {bits} bits of {name}"
     if "one_of" in spec:
         if any(same(value, v) for v in spec["one_of"]):
             return None
@@ -57,6 +72,9 @@ def mismatch(value, spec, size_of=None) -> str | None:
     if "encoded_at_most" in spec:
         size = size_of(value)
         return None if size <= spec["encoded_at_most"] else f"{size} bytes on the wire, at most {spec['encoded_at_most']}"
+    if "contains_item" in spec and isinstance(value, list):
+        found = any(same(v, spec["contains_item"]) for v in value)
+        return None if found else f"{show(value)} does not hold {show(spec['contains_item'])}"
     if not isinstance(value, str):
         return f"{show(value)} is not text"
     if "pattern" in spec:

@@ -69,6 +69,17 @@ def resolve_message(message: dict, scope: Scope, wire, edition: str) -> dict:
     return out
 
 
+def resolve_plain(value, scope: Scope):
+    """A JSON value with every symbol in it resolved (no names: it is not a message)."""
+    if is_symbol(value):
+        return scope.symbol(value)
+    if isinstance(value, dict):
+        return {k: resolve_plain(v, scope) for k, v in value.items()}
+    if isinstance(value, list):
+        return [resolve_plain(v, scope) for v in value]
+    return value
+
+
 def resolve_value(value, message: str, path: str, scope: Scope, wire, edition: str):
     if is_symbol(value):
         return scope.symbol(value)
@@ -88,7 +99,7 @@ def resolve_matcher(spec, message: str, path: str, scope: Scope, wire, edition: 
     if not is_matcher(spec):
         return resolve_value(spec, message, path, scope, wire, edition)
     (key, arg), = ((k, v) for k, v in spec.items() if k in KEYS)
-    if key == "one_of":
+    if key in ("one_of", "none_of"):
         kept = []
         for v in arg:
             try:
@@ -96,7 +107,7 @@ def resolve_matcher(spec, message: str, path: str, scope: Scope, wire, edition: 
             except Unresolved as exc:
                 if exc.param:
                     raise
-        return {"one_of": kept}
+        return {key: kept}
     if key in ("equal", "contains_item"):
         return {**spec, key: resolve_value(arg, message, path, scope, wire, edition)}
     if key == "all_of":

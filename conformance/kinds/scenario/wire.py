@@ -1,7 +1,7 @@
 """What a suite gives the scenario engine: how to build what a step sends and read what comes back.
 
 The engine is generic: it never looks inside a frame. A suite's ``Wire`` composes a step's message (with
-the run's addressing) into the bytes (or call) to send, parses what arrives into a ``Parsed``, resolves
+the run's addressing) into the bytes (or call) to send, and says which transport it rides, parses what arrives into a ``Parsed``, resolves
 the names a scenario uses for values (enumerations), and tells who sent a reply and to whom.
 """
 
@@ -51,9 +51,29 @@ class Composed:
 
 
 class Wire(Protocol):
-    def compose(self, message: dict, encoding: str | None, addressing: Addressing, epoch: float) -> Composed:
+    transport: str  # "datagram" (a live target, --target) or "call" (a handler called through an adapter)
+
+    def compose(self, message: dict, encoding: str | None, addressing: Addressing, epoch: float,
+                step: str = "", edition: str | None = None) -> Composed:
         """The message (decoded form, values resolved) as sent by the session at ``epoch`` (seconds since
-        1970); raises ValueError if it cannot be built."""
+        1970) for send step ``step``, in ``edition``; raises ValueError if it cannot be built."""
+
+    def setup(self, service: str, state: dict, step: str) -> Composed:
+        """(call transports) The call that prepares a handler's state for setup step ``step``."""
+
+    def reply(self, composed: Composed, answer) -> Parsed | None:
+        """(call transports) What a call's answer delivers to the scenario (a response), or None (a publish
+        or a setup, which only acknowledge)."""
+
+    def knows(self, message: str) -> bool:
+        """Whether the suite has the message."""
+
+    def fields_of(self, message: str) -> list[str]:
+        """Its field names (in any edition)."""
+
+    def example(self, message: str, edition: str) -> dict:
+        """The fields of a message with default values (what a reply is assumed to hold when scenarios are
+        checked before a run)."""
 
     def parse(self, data) -> Parsed:
         """What arrived, parsed."""

@@ -104,7 +104,7 @@ class ImcSuite(DataSuite):
         """The first problem of the case's message against the definitions (a decoded form needs its whole
         header); for a scenario, of its steps against the definitions and the exchange rules."""
         if kind in ("scenario", "robustness"):
-            return scenario_problem(self, case if kind == "scenario" else as_scenario(case))
+            return self.live_problem(kind, case)
         if "message" not in case:
             return None
         expects = {case["expect"]} if isinstance(case["expect"], str) else set(case["expect"].values())
@@ -123,28 +123,6 @@ class ImcSuite(DataSuite):
     def open_target(self, target: str, **settings):
         from .live import open_target
         return open_target(self, target, **settings)
-
-
-def scenario_problem(suite: ImcSuite, case: dict) -> tuple[str, str] | None:
-    """The first step of a scenario that names a message, field or value the definitions lack, a parameter,
-    effect or service the exchanges file does not, or a step it does not have (as JSON path suffix, problem)."""
-    from ...kinds.scenario.lint import lint_scenario
-    return lint_scenario(case, suite.wire, suite.behaviour, suite.editions,
-                         lambda m: m in suite.defs.by_abbrev, lambda m: [f.abbrev for f in suite.defs[m].fields],
-                         {s["id"]: s for s in suite.statements})
-
-
-def as_scenario(case: dict) -> dict:
-    """A robustness probe as the scenario it amounts to (send, then expect the reply; or alive), for the lint."""
-    probe = case["probe"]
-    if "alive" in probe:
-        steps = [{"id": "alive", "alive": probe["alive"], "within": probe["within"]}]
-    else:
-        steps = [{"id": "probe", "send": probe["send"], "encoding": probe.get("encoding", "le")},
-                 {"id": "reply", "expect": probe["expect"], "reply_to": "probe", "within": probe["within"]}]
-    if "covers" in case:
-        steps[-1]["covers"] = case["covers"]
-    return dict(case, steps=steps)
 
 
 def shim_argv(script: str) -> list[str]:

@@ -15,16 +15,19 @@ UNKNOWN_SYSTEM, UNKNOWN_ENTITY = 0xFFFF, 0xFF
 
 
 class ImcWire:
+    transport = "datagram"
+
     def __init__(self, defs: Definitions, rule_clauses: dict[str, str]):
         self.defs, self.rule_clauses = defs, rule_clauses
 
-    def compose(self, message: dict, encoding: str | None, addressing: Addressing, epoch: float) -> Composed:
+    def compose(self, message: dict, encoding: str | None, addressing: Addressing, epoch: float,
+                step: str = "", edition: str | None = None) -> Composed:
         header = {"timestamp": float(epoch), "src": addressing.system, "src_ent": addressing.entity,
                   "dst": UNKNOWN_SYSTEM if addressing.node is None else addressing.node, "dst_ent": UNKNOWN_ENTITY}
         header.update(message.get("header", {}))
         frame = codec.encode(self.defs, {"abbrev": message["abbrev"], "header": header, "fields": message["fields"]},
                              encoding or "le")
-        return Composed(frame, codec.decode(self.defs, frame), message["abbrev"], encoding or "le")
+        return Composed(frame, codec.decode(self.defs, frame), message["abbrev"], encoding or "le", {"step": step})
 
     def parse(self, data: bytes) -> Parsed:
         try:
@@ -33,6 +36,22 @@ class ImcWire:
             return Parsed(data, self.named_in_header(data), None, f"{exc.rule} at byte {exc.offset}: {exc.detail}",
                           self.rule_clauses.get(exc.rule), codec.byte_order_of(data))
         return Parsed(data, decoded["abbrev"], decoded, encoding=codec.byte_order_of(data))
+
+    def knows(self, message: str) -> bool:
+        return message in self.defs.by_abbrev
+
+    def fields_of(self, message: str) -> list[str]:
+        return [f.abbrev for f in self.defs[message].fields]
+
+    def example(self, message: str, edition: str) -> dict:
+        defaults = {"plaintext": "", "rawdata": "", "message": None, "message-list": []}
+        return {f.abbrev: 0.0 if f.is_float else defaults.get(f.type, 0) for f in self.defs[message].fields}
+
+    def setup(self, service: str, state: dict, step: str):
+        raise ValueError("an IMC node over UDP has no handler to set up")
+
+    def reply(self, composed, answer):
+        raise ValueError("an IMC node answers over the link, not through calls")
 
     def readdress(self, data: bytes, encoding: str, src: tuple[int, int], dst: int) -> bytes:
         """A corpus frame as if the session sent it to the node: header src/src_ent and dst rewritten (in the

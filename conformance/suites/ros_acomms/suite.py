@@ -7,6 +7,7 @@ from functools import cached_property
 from pathlib import Path
 
 from ...core.suite import BuiltinAdapter, Group
+from ...kinds.scenario import ScenarioKind
 from ...kinds.vector import VectorKind
 from ...paths import VECTORS
 from . import codec, forms
@@ -15,6 +16,7 @@ from .msgtext import expected_types, parse_full_text, text_differences
 from .package_files import write_package
 from ..data_suite import DataSuite
 from .paths import ROS
+from .wire import RosWire
 
 ADAPTERS_PACKAGE = "imc_conformance.adapters"
 
@@ -67,7 +69,7 @@ class RosSuite(DataSuite):
     encodings = RosCodec.encodings
     encoding_param = "encoding"
     group_label = "type"
-    case_folders = {"cases": "vector"}
+    case_folders = {"cases": "vector", "scenarios": "scenario"}
     packaged = ROS
 
     def __init__(self, folder: Path, defs: RosDefinitions):
@@ -82,7 +84,12 @@ class RosSuite(DataSuite):
 
     @cached_property
     def kinds(self) -> dict:
-        return {"vector": VectorKind(RosCodec(self.defs, frozenset(r["id"] for r in self.rules)))}
+        return {"vector": VectorKind(RosCodec(self.defs, frozenset(r["id"] for r in self.rules))),
+                "scenario": ScenarioKind(self.wire, self.behaviour)}
+
+    @cached_property
+    def wire(self) -> RosWire:
+        return RosWire(self.defs)
 
     @property
     def adapters(self) -> dict[str, BuiltinAdapter]:
@@ -91,19 +98,25 @@ class RosSuite(DataSuite):
                                       help="rosbags (library; --adapter-arg edition=E or msgs=DIR)"),
             "genpy": BuiltinAdapter("genpy", library=f"{ADAPTERS_PACKAGE}.genpy_adapter:GenpyAdapter",
                                     help="genpy from Debian (library; --adapter-arg edition=E or msgs=DIR)"),
+            "reference-handler": BuiltinAdapter("reference-handler", library=f"{__package__}.handler:ReferenceHandler",
+                                                help="the suite's reference service handler (library; scenarios; "
+                                                     "--adapter-arg broken=NAME breaks one rule)"),
         }
 
     def schema(self, kind: str) -> Path:
-        return VECTORS / "schema" / "ros_acomms-vectors.schema.json"
+        return VECTORS / "schema" / ("scenarios.schema.json" if kind == "scenario" else "ros_acomms-vectors.schema.json")
 
     def group_of(self, doc: dict) -> str:
-        return doc["message"]["name"]
+        return doc["message"].get("name") or doc["message"]["abbrev"]
 
     def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
         """Per edition the case exists in: its type must exist, its MD5 must be the type's (a changed
-        definition invalidates exactly the cases that pinned the old one), its message must fit the type."""
+        definition invalidates exactly the cases that pinned the old one), its message must fit the type. A
+        scenario: what the definitions and the exchanges file can see."""
         from .msgtext import md5
 
+        if kind == "scenario":
+            return self.live_problem(kind, case)
         editions = list(self.defs.editions) if isinstance(case["expect"], str) else list(case["expect"])
         for name in editions:
             view = self.defs.edition(name)

@@ -1,7 +1,8 @@
 """Rebuild the ros_acomms corpus: one vector file per type, and the coverage table, deterministically.
 
 ``imc-conformance generate --suite ros_acomms`` writes ``vectors/ros_acomms/cases/*.json`` and
-``vectors/ros_acomms/coverage.md``; ``--check`` only reports drift. A type whose definition is the same in
+``vectors/ros_acomms/coverage.md`` and the behavioural coverage of its scenarios,
+``vectors/ros_acomms/behaviour-coverage.md``; ``--check`` only reports drift. A type whose definition is the same in
 every edition it exists in has one set of cases; otherwise each edition gets its own, under an id segment
 naming the edition (``ros_acomms/SST/9.0.0/...``).
 """
@@ -15,6 +16,7 @@ import struct
 import sys
 from collections import Counter, defaultdict
 
+from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
 from .. import codec
 from ..definitions import Edition, FieldType, Message, RosDefinitions, TypeDef, load_definitions
 from ..msgtext import full_text, md5, service_md5
@@ -263,6 +265,8 @@ def build_corpus(defs: RosDefinitions) -> dict[str, str]:
                "editions": [e for e in defs.editions if t.in_edition(e)], "cases": cases}
         files[f"cases/{t.name}.json"] = json.dumps(doc, indent=1, ensure_ascii=True) + "\n"
     files["coverage.md"] = coverage_markdown(defs, rules, per_type)
+    statements = json.loads(ros_data("statements.json").read_text(encoding="utf-8"))["statements"]
+    files["behaviour-coverage.md"] = behaviour_markdown("ros_acomms", statements, live_cases(ros_data()))
     return files
 
 
