@@ -38,6 +38,8 @@ def options(args, suite, everything) -> dict:
         if given:
             raise ValueError(f"the suite {suite.name!r} has no live cases: {', '.join(given)} do not apply")
         return {}
+    if args.robustness and "robustness" not in suite.kinds:
+        raise ValueError(f"--robustness: the suite {suite.name!r} has no robustness phase")
     out = {"params": vocabulary.parameters(behaviour, args.param),
            "effects": vocabulary.effects(behaviour, args.allow_effects),
            "time_scale": args.time_scale, "profile": suite.profile(args.profile or "seed"),
@@ -84,9 +86,16 @@ def dry_run(suite, cases, args, options) -> int:
         why = kind.admit(case.data, options)
         plans = [] if why else kind.plan(case.data, args.edition, set(suite.encodings), options)
         if why or not plans or plans[0].op == "skip":
-            print(f"{case.id}: not run ({why or (plans[0].params['reason'] if plans else 'not in this edition')})")
+            reason = f"not run ({why})" if why else plans[0].params["reason"] if plans else "not in this edition"
+            print(f"{case.id}: {reason}")
             continue
-        for step, sent in planned_sends(plans[0].params["program"], addressing, 0.0):
+        program = plans[0].params["program"]
+        phase = getattr(program, "phase", None)
+        if phase is not None:
+            print(f"{case.id}: the robustness phase: {len(phase.frames)} corpus frames in blocks of "
+                  f"{phase.settings['block']}, then {phase.settings['garbage']} garbage datagrams; this probe, before, "
+                  "after each block and after the garbage:")
+        for step, sent in planned_sends(program, addressing, 0.0):
             text = sent if isinstance(sent, str) else json.dumps({k: v for k, v in sent.items() if k != "header"})
             print(f"{case.id} {step}: {printable(text)}")
     return 0

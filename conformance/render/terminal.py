@@ -48,11 +48,15 @@ def print_result(result: RunResult, console: Console) -> None:
         console.print(f"[red]{c.verdict.value}[/] {safe(c.id)}{errata}: {safe(c.detail[:300])}")
         for line in timeline_lines(c, SHOWN_TIMELINE):
             console.print(f"    [dim]{safe(line[:200])}[/]")
-    inconclusive = [c for c in result.cases if c.verdict is Verdict.INCONCLUSIVE and not failing(c.verdict, result.strict)]
-    for c in inconclusive[:SHOWN_FAILURES]:
-        console.print(f"[yellow]INCONCLUSIVE[/] {safe(c.id)}: {safe(c.detail[:300])}")
-    if len(inconclusive) > SHOWN_FAILURES:
-        console.print(f"… and {len(inconclusive) - SHOWN_FAILURES} more inconclusive cases")
+    noted: dict[tuple, list[str]] = {}  # not failing, but worth a look: grouped by verdict and detail
+    for c in result.cases:
+        if c.verdict in (Verdict.NON_STRICT, Verdict.INCONCLUSIVE) and not failing(c.verdict, result.strict):
+            noted.setdefault((c.verdict.value, c.detail), []).append(c.id)
+    for (verdict, detail), ids in list(noted.items())[:SHOWN_FAILURES]:
+        which = safe(ids[0]) if len(ids) == 1 else f"{len(ids)} cases ({safe(', '.join(ids[:3]))}{', …' if len(ids) > 3 else ''})"
+        console.print(f"[yellow]{verdict}[/] {which}: {safe(detail[:300])}")
+    if len(noted) > SHOWN_FAILURES:
+        console.print(f"… and {len(noted) - SHOWN_FAILURES} more groups of non-strict or inconclusive cases")
     if len(shown) > SHOWN_FAILURES:
         console.print(f"… and {len(shown) - SHOWN_FAILURES} more failing cases (see --json/--html reports)")
     for line in incident_lines(result):

@@ -69,6 +69,20 @@ class ProbeProgram:
     def wire(self):
         return self.phase.wire
 
+    @property
+    def edition(self) -> str:
+        return self.phase.edition
+
+    @property
+    def params(self) -> dict:
+        return self.phase.params
+
+    @property
+    def scenario(self) -> dict:
+        """The probe as the scenario it amounts to (what ``--dry-run`` shows)."""
+        from .kind import as_scenario
+        return as_scenario(self.case)
+
     def resources(self) -> set[str]:
         return {"*"}
 

@@ -22,7 +22,8 @@ class ImcWire:
 
     def compose(self, message: dict, encoding: str | None, addressing: Addressing, epoch: float,
                 step: str = "", edition: str | None = None) -> Composed:
-        header = {"timestamp": float(epoch), "src": addressing.system, "src_ent": addressing.entity,
+        header = {"timestamp": float(epoch), "src": UNKNOWN_SYSTEM if addressing.system is None else addressing.system,
+                  "src_ent": UNKNOWN_ENTITY if addressing.entity is None else addressing.entity,
                   "dst": UNKNOWN_SYSTEM if addressing.node is None else addressing.node, "dst_ent": UNKNOWN_ENTITY}
         header.update(message.get("header", {}))
         frame = codec.encode(self.defs, {"abbrev": message["abbrev"], "header": header, "fields": message["fields"]},
