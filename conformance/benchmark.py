@@ -10,7 +10,10 @@ one run (these machines are noisy: compare the ratios, not absolute numbers acro
 - subprocess: the whole corpus through the pipelined subprocess adapter and the imcpy shim;
 - one process per case: the slow anchor, a fresh shim process for each case of a sample;
 - ros_acomms: its whole corpus (seed edition) through ``run_cases`` with rosbags and with genpy, and
-  rosbags' own calls made bare (deserialize every frame, serialize what it decoded).
+  rosbags' own calls made bare (deserialize every frame, serialize what it decoded);
+- live: the whole IMC scenario set (seed profile, every effect allowed) against the reference node
+  (``imc-conformance serve``) over loopback UDP, the same set on virtual time (the engine's own cost), and
+  once, the robustness phase over loopback.
 """
 
 from __future__ import annotations
@@ -28,7 +31,9 @@ ROS_EDITION = "seed"
 # (what, row, unit, bound): seconds must stay under the bound, cases/s must reach it.
 TARGETS = (("whole corpus in-process", "library", "s", 2.0),
            ("in-process throughput", "library", "cases/s", 20_000),
-           ("subprocess throughput", "subprocess", "cases/s", 5_000))
+           ("subprocess throughput", "subprocess", "cases/s", 5_000),
+           ("scenario set against the reference node over loopback", "live", "s", 15.0))
+LIVE_PARAMS = {"peer": "imc-peer-1", "beacon": "b1", "sms_number": "+351000000000", "remote_system": 8208}
 
 
 def target_lines(medians: dict[str, float], cases: int) -> list[str]:
@@ -100,6 +105,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--skip-subprocess", action="store_true")
     parser.add_argument("--skip-ros", action="store_true")
+    parser.add_argument("--skip-live", action="store_true")
+    parser.add_argument("--skip-robustness", action="store_true", help="no robustness phase over loopback")
     args = parser.parse_args(argv)
 
     from .adapters.imcpy_adapter import adapter
@@ -108,7 +115,8 @@ def main(argv: list[str] | None = None) -> int:
 
     suite, cases = open_corpus("imc")
     load = timed(lambda: (read_cases.cache_clear(), open_corpus("imc")))
-    cases = [c for c in cases if expectation(c.data, EDITION) is not None]
+    everything = cases
+    cases = [c for c in cases if c.kind == "vector" and expectation(c.data, EDITION) is not None]
     library = LibrarySession(adapter(), "imcpy")
     shim = suite.adapters["imcpy-shim"].argv()
 
@@ -148,6 +156,8 @@ def main(argv: list[str] | None = None) -> int:
               f"pipelined subprocess vs one process per case: {med['process per case'] / med['subprocess']:.0f}x faster")
     if not args.skip_ros:
         ros_rows(args.repeat)
+    if not args.skip_live:
+        med["live"] = live_rows(suite, everything, args.repeat, not args.skip_robustness)
     for line in target_lines(med, n):
         print(line)
     return 0
@@ -161,7 +171,7 @@ def ros_rows(repeat: int) -> None:
     from .sessions.library import LibrarySession
 
     suite, cases = open_corpus("ros_acomms")
-    cases = [c for c in cases if expectation(c.data, ROS_EDITION) is not None]
+    cases = [c for c in cases if c.kind == "vector" and expectation(c.data, ROS_EDITION) is not None]
     adapters = {"rosbags": RosbagsAdapter(), "genpy": GenpyAdapter()}
     rows: dict[str, list[float]] = {"ros rosbags": [], "rosbags alone": [], "ros genpy": []}
     for _ in range(repeat):
@@ -176,6 +186,69 @@ def ros_rows(repeat: int) -> None:
         print(f"  {name:18s} {seconds:7.3f} s  {n / seconds:10,.0f} cases/s")
     print(f"runner with rosbags vs rosbags' bare calls: {med['ros rosbags'] / med['rosbags alone']:.1f}x; "
           f"genpy vs rosbags through the runner: {med['ros genpy'] / med['ros rosbags']:.2f}x")
+
+
+def live_rows(suite, everything, repeat: int, robustness: bool) -> float:
+    """The scenario set against the reference node over loopback (median seconds), and on virtual time; once,
+    the robustness phase over loopback."""
+    import re
+    import subprocess
+    import sys
+
+    from .sessions.datagram import DatagramSession
+    from .sessions.virtual import VirtualLink
+    from .suites.imc.node import ReferenceNode
+    from .suites.imc.peer import DEFAULT_SYSTEM, ImcPeer
+
+    scenarios = [c for c in everything if c.kind == "scenario"]
+    options = {"params": LIVE_PARAMS, "effects": {"all"}, "profile": suite.profile("seed"),
+               "corpus": tuple(c for c in everything if c.kind == "vector")}
+    node = subprocess.Popen([sys.executable, "-m", "imc_conformance.cli", "serve", "--port", "0"],
+                            stderr=subprocess.PIPE, text=True)
+    rows: dict[str, list[float]] = {"live": [], "virtual": []}
+    verdicts = set()
+    try:
+        port = int(re.search(r"udp://127\.0\.0\.1:(\d+)", node.stderr.readline())[1])
+        for _ in range(repeat):
+            session = suite.open_target(f"udp://127.0.0.1:{port}")
+            try:
+                start = time.perf_counter()
+                result = run_cases(session, suite, scenarios, edition=EDITION, adapter="udp", options=options)
+                rows["live"].append(time.perf_counter() - start)
+                verdicts |= set(result.summary)
+            finally:
+                session.close()
+            reference = ReferenceNode(suite.defs, suite.behaviour, edition=EDITION, address=("127.0.0.1", 6002))
+            link = VirtualLink(reference, ("127.0.0.1", 6002), ("127.0.0.1", 6001))
+            peer = ImcPeer(suite.defs, system=DEFAULT_SYSTEM, node=None, service="imc+udp://127.0.0.1:6001/",
+                           host="127.0.0.1", epoch=link.epoch)
+            virtual = DatagramSession(link, peer, suite.wire, session.hello(), startup=10.0)
+            rows["virtual"].append(timed(lambda: run_cases(virtual, suite, scenarios, edition=EDITION, adapter="virtual",
+                                                           options=options, clock=link.now)))
+        phase = None
+        if robustness:
+            probes = [c for c in everything if c.kind == "robustness"]
+            session = suite.open_target(f"udp://127.0.0.1:{port}")
+            try:
+                start = time.perf_counter()
+                result = run_cases(session, suite, probes, edition=EDITION, adapter="udp",
+                                   options=dict(options, robustness=True))
+                phase = (time.perf_counter() - start, result.summary)
+            finally:
+                session.close()
+    finally:
+        node.terminate()
+        node.wait(timeout=10)
+        node.stderr.close()
+    med = {k: statistics.median(v) for k, v in rows.items()}
+    print(f"live: {len(scenarios)} scenarios (seed profile, every effect allowed) against the reference node; "
+          f"medians of {repeat} runs; verdicts seen: {', '.join(sorted(verdicts))}")
+    print(f"  over loopback UDP   {med['live']:7.3f} s")
+    print(f"  on virtual time     {med['virtual']:7.3f} s  (the engine and the node without the protocol's waits: "
+          f"1/{med['live'] / med['virtual']:.0f} of the loopback run)")
+    if phase is not None:
+        print(f"  robustness phase over loopback (once): {phase[0]:.1f} s; verdicts {phase[1]}")
+    return med["live"]
 
 
 if __name__ == "__main__":

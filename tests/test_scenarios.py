@@ -194,3 +194,23 @@ def test_a_step_may_not_cover_an_unknown_or_untestable_statement(suite, cases):
         broken = dict(case, steps=[dict(case["steps"][0]), dict(case["steps"][1], covers=[sid])])
         problem = suite.live_problem("scenario", broken)
         assert problem is not None and problem[0] == ".steps[1].covers[0]" and why in problem[1]
+
+
+def test_the_scenario_set_runs_concurrently_on_protocol_time(suite, cases):
+    """Independent scenarios run together and a released sequence frees the modem during its quiet period: the set
+    costs its longest chain of protocol time, not the sum (virtual time: this is exact, not a timing test)."""
+    result, link = run_virtual(suite, cases)
+    alone = sum(c.timeline[-1]["t"] for c in result.cases if c.timeline and "/passive/" not in c.id)
+    assert link.now() < 12.0 and alone > 2 * link.now()
+
+
+def test_only_uniquely_correlated_sequences_may_release_their_resources(suite, cases):
+    import copy
+
+    case = copy.deepcopy(next(c.data for c in cases if c.id == "imc/AcousticOperation/scenario/range"))
+    case["steps"][-1]["release"] = True
+    problem = suite.live_problem("scenario", case)
+    assert problem[0] == ".steps[1].release" and "no $unique value" in problem[1]
+    two = copy.deepcopy(next(c.data for c in cases if c.id == "imc/AcousticRequest/scenario/two-at-once"))
+    two["steps"][2]["release"] = True
+    assert "only the last step that waits" in suite.live_problem("scenario", two)[1]

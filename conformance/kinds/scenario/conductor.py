@@ -43,6 +43,7 @@ class Conductor:
         self.owners: dict[tuple, int] = {}
         self.entities: dict[int, int] = {}  # the entity each machine's requests came from (the latest wins)
         self._next_unique, self._entities, self._entity = first_unique, entities, 0
+        self._released: set[int] = set()  # machines seen to have released their resources
 
     @property
     def done(self) -> bool:
@@ -67,7 +68,8 @@ class Conductor:
         programs = {j: self.program_of(self.jobs[j]) for j in self.pending}
         if any(getattr(self.program_of(self.jobs[k]), "exclusive", False) for k in self.running):
             return []
-        busy = set().union(*(self.program_of(self.jobs[k]).resources() for k in self.running))
+        busy = set().union(*(self.program_of(self.jobs[k]).resources() for k, m in self.running.items()
+                             if not getattr(m, "released", False)))
         for job in list(self.pending):
             if job not in self.pending:
                 continue  # started with its batch
@@ -158,4 +160,6 @@ class Conductor:
             machine = self.running.pop(job)
             for i, member in enumerate(self.members.pop(job)):
                 self.finished.append((self.jobs[member], machine.record(i)))
-        return self.start(t) if ended and self.pending else []
+        freed = {k for k, m in self.running.items() if getattr(m, "released", False)} - self._released
+        self._released |= freed
+        return self.start(t) if (ended or freed) and self.pending else []

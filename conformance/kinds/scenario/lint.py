@@ -92,6 +92,10 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of):
                 return f"{where}.{kind}", f"step {ref!r} opens the exchange {exchange['id']!r}, answered by {exchange['reply']}"
             if kind == "sequence" and "state" not in exchange:
                 return where, f"the exchange {exchange['id']!r} has no states for a sequence"
+            if step.get("release"):
+                problem = _release_problem(case, i, ref, exchange)
+                if problem:
+                    return where + ".release", problem
         elif kind == "sequence":
             return where, "a sequence needs reply_to"
         for key in ("fields", "terminal"):
@@ -107,3 +111,15 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of):
         if message is not None and kind in ("expect", "sequence"):
             scope.replies[step["id"]] = wire.example(message, edition)  # what a later step's $reply reads
     return None
+
+
+def _release_problem(case: dict, index: int, ref: str, exchange: dict) -> str | None:
+    """Why a sequence may not release its resources early: replies not tied to the request by a unique value,
+    or steps after it that still wait."""
+    if any(k in later for later in case["steps"][index + 1:] for k in ("send", "setup", *WAITS, "accepted")):
+        return "only the last step that waits may release the scenario's resources"
+    fields = next(s for s in case["steps"] if s["id"] == ref)["send"]["fields"]
+    unique = [r for r in exchange["correlation"] if r["kind"] == "echo"
+              and isinstance(fields.get(r["request_field"]), dict) and "$unique" in fields[r["request_field"]]]
+    return None if unique else (f"the exchange {exchange['id']!r} ties replies to step {ref!r} by no $unique value, "
+                                "so another scenario's replies could be taken for its own")

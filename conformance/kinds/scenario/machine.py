@@ -41,7 +41,9 @@ class Program:
 
     def resources(self) -> set[str]:
         """What it must not share with a scenario running at the same time: its declared resources and the
-        messages it waits for (so no two scenarios wait for the same message at once)."""
+        messages it waits for (so no two scenarios wait for the same message at once). A sequence step with
+        ``release`` frees them once its terminal state arrived (its replies carry the request's unique id, so
+        another scenario's cannot be taken for them): only its quiet period is then left."""
         return set(self.scenario.get("resources", ())) | self.watched()
 
     def watched(self) -> set[str]:
@@ -102,6 +104,7 @@ class Machine:
         self.keys_seen = 0  # how many of keys the conductor has registered
         self.backlog: list[Parsed] = []  # replies to a request a later step awaits
         self.acks: dict[str, str | None] = {}  # send or setup step -> why the target refused its call, or None
+        self.released = False  # its resources are free for another scenario (a released sequence ended)
         self.t0 = 0.0
         self.index = -1
         self.step: _Step | None = None
@@ -276,6 +279,11 @@ class Machine:
             return bool(step.replies)
         return False  # sequence, silence and wait end at their deadline; accepted at its acknowledgement
 
+    def _last_wait(self, step: _Step) -> bool:
+        """Whether no step after ``step`` waits for anything (only its quiet period is left)."""
+        return not any(k in later for later in self.program.scenario["steps"][self.index + 1:]
+                       for k in ("expect", "sequence", "silence", "alive", "accepted", "send", "setup"))
+
     def _must_failed(self) -> bool:
         return any(not f.passed and f.level == "MUST" for f in self.findings)
 
@@ -383,6 +391,7 @@ class Machine:
         if any(same(value, s) for s in terminal):
             step.terminal = parsed
             step.until = t + self._bound(spec.get("quiet", 1.0))
+            self.released = self.released or (spec.get("release", False) and self._last_wait(step))
             self._log(t, "received", parsed, f"{name}: terminal state")
         elif any(same(value, s) for s in progress):
             self._log(t, "received", parsed, f"{name}: progress state")
