@@ -214,3 +214,30 @@ def test_only_uniquely_correlated_sequences_may_release_their_resources(suite, c
     two = copy.deepcopy(next(c.data for c in cases if c.id == "imc/AcousticRequest/scenario/two-at-once"))
     two["steps"][2]["release"] = True
     assert "only the last step that waits" in suite.live_problem("scenario", two)[1]
+
+
+def test_echoed_requests_and_the_nodes_internal_traffic_are_not_taken_for_replies(suite, cases):
+    """DUNE sends what its UDP transport lists to every contact: the session's own requests come back, and so do
+    the node's internal messages, addressed to itself. Replies are matched on the header, so neither misleads."""
+    from imc_conformance.suites.imc import codec
+    from imc_conformance.suites.imc.node import ReferenceNode
+    from live_harness import NODE
+
+    class ChattyNode(ReferenceNode):
+        def receive(self, t, data, source):
+            super().receive(t, data, source)
+            if source in self.contacts.values():
+                self._later(t, 0.001, source, data)  # the request itself, back to its sender
+                internal = {"abbrev": "AcousticStatus", "header": {"timestamp": 0.0, "src": self.system, "src_ent": 43,
+                                                                   "dst": self.system, "dst_ent": 44},
+                            "fields": {"req_id": 7, "type": 1, "status": 1, "info": "", "range": 0.0}}
+                self._later(t, 0.002, source, codec.encode(self.defs, internal, "le"))
+
+    node = ChattyNode(suite.defs, suite.behaviour, edition=suite.editions[0], address=NODE)
+    from live_harness import virtual_session
+    from imc_conformance.core.runner import run_cases
+
+    session, link = virtual_session(suite, suite.editions[0], node=node)
+    result = run_cases(session, suite, scenario_cases(cases), edition=suite.editions[0], adapter="virtual",
+                       options=EVERYTHING, clock=link.now)
+    assert {c.id: c.detail for c in result.cases if c.verdict is not Verdict.PASS} == {}

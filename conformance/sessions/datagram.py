@@ -43,6 +43,9 @@ class Peer(Protocol):
 
     def observe(self, t: float, parsed) -> None: ...
 
+    def accepts(self, parsed) -> bool:
+        """Whether something that arrived is for the session (by its header), so the scenarios see it."""
+
 
 class DatagramSession:
     incidents: tuple = ()
@@ -109,7 +112,7 @@ class DatagramSession:
         if got is not None:
             parsed = self.wire.parse(got[1])
             self.peer.observe(got[0], parsed)
-            if conductor is not None:
+            if conductor is not None and self.peer.accepts(parsed):
                 self._transmit(conductor.deliver(got[0], parsed))
         if conductor is not None:
             self._transmit(conductor.wake(t))

@@ -2,7 +2,12 @@
 unannounced sources (imc-wire.md, "IMC over UDP"). It announces its ``imc+udp://IP:PORT/`` service to the
 target and to the target host's discovery ports 30100-30104, heart-beats to the target at 1 Hz, learns the
 node's id from its first valid frame (unless given), and says the target is ready once a valid frame from
-it arrived (at once when its id is given: the seeds do not make Heartbeat periodic, erratum E7)."""
+it arrived (at once when its id is given: the seeds do not make Heartbeat periodic, erratum E7).
+
+It also says which frames are for the session: replies are matched on the header, not on the socket they
+arrive at, because a node like DUNE sends what its UDP transport lists to every contact. Frames the session
+itself sent (echoed back) and frames addressed to another system (the node's own internal messages) are not
+for it; frames to the session's id, to anyone (0xFFFF) or to 0 (DUNE addresses Announce so) are."""
 
 from __future__ import annotations
 
@@ -46,6 +51,13 @@ class ImcPeer:
             self.next_announce = t + ANNOUNCE_EVERY
             out.append((None, self._announce(t)))
         return out
+
+    def accepts(self, parsed) -> bool:
+        """Whether a frame is for the session (malformed frames are, so the byte-level checks see them)."""
+        if parsed.decoded is None:
+            return True
+        header = parsed.decoded["header"]
+        return header["src"] != self.system and header["dst"] in (self.system, 0xFFFF, 0)
 
     def observe(self, t: float, parsed) -> None:
         if parsed.decoded is None:
