@@ -10,48 +10,38 @@ it stopped being answered, naming the block and, when the target can be restarte
 from __future__ import annotations
 
 from ...core.cases import expectation
-from ...core.results import CheckResult, Judgement
-from ...core.session import Answer, Request
-from ..scenario.kind import effects_barred, gate, judgement
+from ..scenario.kind import LiveKind
 from .phase import Frame, Phase, ProbeProgram
 
 
-class RobustnessKind:
+class RobustnessKind(LiveKind):
     name = "robustness"
 
     def __init__(self, wire, behaviour: dict):
-        self.wire, self.behaviour = wire, behaviour
+        super().__init__(wire, behaviour)
         self.settings = behaviour["robustness"]
-        self._phases: dict = {}
+        self._last: tuple | None = None
 
     def admit(self, case: dict, options: dict) -> str | None:
         if not options.get("robustness"):
             return "the robustness phase runs only with --robustness"
-        return effects_barred(case, options)
+        return super().admit(case, options)
 
-    def plan(self, case: dict, edition: str, emits: set[str], options: dict | None = None) -> list[Request]:
-        options = options or {}
-        if expectation(case, edition) is None:
-            return []
-        skipped = gate(case, options, self.behaviour)
-        if skipped is not None:
-            return [skipped]
-        program = ProbeProgram(case["id"], case, self.phase(edition, options))
-        return [Request("robustness", "scenario", params={"program": program, "profile": options.get("profile")})]
+    def program(self, case: dict, edition: str, options: dict) -> ProbeProgram:
+        return ProbeProgram(case["id"], case, self.phase(edition, options))
 
-    def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult | Judgement:
-        return judgement(case, request, answer, case["probe"].get("expect") or case["id"].split("/")[1])
+    def reply_group(self, case: dict) -> str:
+        return case["probe"].get("expect") or case["id"].split("/")[1]
 
     def phase(self, edition: str, options: dict) -> Phase:
-        """The phase every probe of a run shares (one per edition and options)."""
-        corpus = options.get("corpus", ())
-        key = (edition, id(corpus), frozenset(options.get("effects", ())), options.get("restart", False))
-        if key not in self._phases:
-            frames, skipped = self.frames(corpus, edition, options.get("effects", set()))
-            self._phases[key] = Phase(frames, skipped, self.settings, self.wire, tuple(self.behaviour["exchanges"]),
-                                      edition, dict(options.get("params", {})), float(options.get("time_scale", 1.0)),
-                                      bool(options.get("restart")))
-        return self._phases[key]
+        """The phase every probe of a run shares: one per run (its options object) and edition."""
+        if self._last is not None and self._last[0] is options and self._last[1] == edition:
+            return self._last[2]
+        frames, skipped = self.frames(options.get("corpus", ()), edition, options.get("effects", set()))
+        phase = Phase(frames, skipped, self.settings, self.wire, self.exchanges, edition,
+                      dict(options.get("params", {})), float(options.get("time_scale", 1.0)), bool(options.get("restart")))
+        self._last = (options, edition, phase)  # holding the options keeps the identity test sound
+        return phase
 
     def frames(self, corpus, edition: str, allowed: set[str]) -> tuple[list[Frame], list[str]]:
         """Every frame of the byte vectors of ``edition``, in corpus order, but those too large for one datagram

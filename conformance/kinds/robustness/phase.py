@@ -194,8 +194,9 @@ class PhaseMachine:
         self._log("phase", f"{len(phase.frames)} corpus frames in blocks of {settings['block']}, then "
                            f"{settings['garbage']} garbage datagrams; {len(self.probes)} probes"
                   + "".join(f"; skipped {why}" for why in phase.skipped))
+        unanswered = yield from self._round(self.probes, "baseline")
         for probe in self.probes:
-            probe.baseline = yield from self._probe(probe, "baseline")
+            probe.baseline = probe not in unanswered
         blocks = [phase.frames[i:i + settings["block"]] for i in range(0, len(phase.frames), settings["block"])]
         for k, block in enumerate(blocks, 1):
             if not self._listening():
@@ -203,9 +204,8 @@ class PhaseMachine:
                 break
             yield from self._replay(block)
             self._log("block", f"block {k} of {len(blocks)} sent: {_span(block)}")
-            for probe in self._listening():
-                if not (yield from self._probe(probe, f"after block {k}")):
-                    probe.silenced, probe.block = f"block {k} of {len(blocks)} ({_span(block)})", k - 1
+            for probe in (yield from self._round(self._listening(), f"after block {k}")):
+                probe.silenced, probe.block = f"block {k} of {len(blocks)} ({_span(block)})", k - 1
         if self._listening():
             rng = random.Random(settings["seed"])
             source = (self.addressing.system, FLOOD_ENTITY)
@@ -214,9 +214,8 @@ class PhaseMachine:
                 yield _Wait(self.now + self._scaled(settings["garbage_pace"]))
             yield _Wait(self.now + self._scaled(settings["settle"]))
             self._log("garbage", f"{settings['garbage']} garbage datagrams sent (seed {settings['seed']})")
-            for probe in self._listening():
-                if not (yield from self._probe(probe, "after the garbage")):
-                    probe.silenced = f"the {settings['garbage']} garbage datagrams"
+            for probe in (yield from self._round(self._listening(), "after the garbage")):
+                probe.silenced = f"the {settings['garbage']} garbage datagrams"
         silenced = sorted({p.block for p in self.probes if p.block is not None})
         if silenced and self.phase.can_restart:
             for k in silenced:
@@ -246,10 +245,7 @@ class PhaseMachine:
             yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
             half = candidates[:max(1, len(candidates) // 2)] if len(candidates) > 1 else candidates
             yield from self._replay(half)
-            silent = False
-            for probe in probes:
-                if not (yield from self._probe(probe, f"bisecting: after {_span(half)}")):
-                    silent = True
+            silent = bool((yield from self._round(probes, f"bisecting: after {_span(half)}")))
             if len(candidates) == 1:
                 what = (f"the frame {_name(half[0])} alone silences it" if silent else
                         f"no single frame does it alone: the block as a whole does (last candidate {_name(half[0])})")
@@ -261,22 +257,38 @@ class PhaseMachine:
 
     # ------------------------------------------------------------------ probing
 
-    def _probe(self, probe: Probe, when: str):
-        """Ask once (and again, up to the probe's tries) and wait for the reply that shows the kind is served."""
-        spec = probe.program.case["probe"]
-        tries = spec.get("tries", 2)
-        for attempt in range(1, tries + 1):
-            accepts, composed = self._ask(probe, spec)
-            if composed is not None:
-                yield _Send(composed)
-            got = yield _Wait(self.now + self._scaled(spec["within"]), accepts)
-            if got is not None:
-                self._log("probe", f"{when}: {got.message} received" + (f" (try {attempt})" if attempt > 1 else ""),
-                          probe)
-                return True
-        self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within {spec['within']} s "
-                           f"({tries} tries)", probe)
-        return False
+    def _round(self, probes: list[Probe], when: str):
+        """Ask every probe at once (and again, up to each probe's tries) and wait for the replies that show each
+        request kind is served; the probes that got none."""
+        waiting = {id(p): p for p in probes}
+        for attempt in range(1, max((p.program.case["probe"].get("tries", 2) for p in probes), default=0) + 1):
+            asked = {}
+            for probe in waiting.values():
+                spec = probe.program.case["probe"]
+                if attempt > spec.get("tries", 2):
+                    continue
+                accepts, composed = self._ask(probe, spec)
+                if composed is not None:
+                    yield _Send(composed)
+                asked[id(probe)] = (probe, accepts, self.now + self._scaled(spec["within"]))
+            while asked:
+                got = yield _Wait(min(d for _, _, d in asked.values()),
+                                  lambda parsed: any(a(parsed) for _, a, _ in asked.values()))
+                for key, (probe, accepts, deadline) in list(asked.items()):
+                    if got is not None and accepts(got):
+                        self._log("probe", f"{when}: {got.message} received" + (f" (try {attempt})" if attempt > 1 else ""),
+                                  probe)
+                        del asked[key], waiting[key]
+                        got = None
+                    elif deadline <= self.now:
+                        del asked[key]
+            if not waiting:
+                break
+        for probe in waiting.values():
+            spec = probe.program.case["probe"]
+            self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within {spec['within']} s "
+                               f"({spec.get('tries', 2)} tries)", probe)
+        return list(waiting.values())
 
     def _ask(self, probe: Probe, spec: dict):
         """(what accepts the reply, the request to send or None) for one try of a probe."""

@@ -20,17 +20,16 @@ ANSWER_VERDICTS = {"crash": Verdict.CRASH, "timeout": Verdict.TIMEOUT, "adapter-
                    "unsupported": Verdict.UNSUPPORTED, "inconclusive": Verdict.INCONCLUSIVE}
 
 
-class ScenarioKind:
-    """Scenarios of one suite: its wire, its exchange rules and the vocabulary of its parameters, effects and
-    services (``behaviour``: the suite's exchanges file)."""
+class LiveKind:
+    """What the live case kinds share: a case runs when its effects are allowed, is judged without the target
+    when it cannot run as asked (``gate``), else becomes one program the session runs; the kind says which
+    program (``program``) and where a malformed frame that names no message is filed (``reply_group``)."""
 
-    name = "scenario"
+    name: str
 
     def __init__(self, wire, behaviour: dict):
         self.wire, self.behaviour = wire, behaviour
         self.exchanges = tuple(behaviour["exchanges"])
-
-    # ------------------------------------------------------------ planning and judging
 
     def admit(self, case: dict, options: dict) -> str | None:
         return effects_barred(case, options)
@@ -42,14 +41,30 @@ class ScenarioKind:
         skipped = gate(case, options, self.behaviour)
         if skipped is not None:
             return [skipped]
-        program = Program(case["id"], case, self.exchanges, self.wire, edition, dict(options.get("params", {})),
-                          float(options.get("time_scale", 1.0)))
-        return [Request("scenario", "scenario", params={"program": program, "profile": options.get("profile")})]
+        program = self.program(case, edition, options)
+        return [Request(self.name, "scenario", params={"program": program, "profile": options.get("profile")})]
 
     def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult | Judgement:
-        return judgement(case, request, answer, self.reply_of(case))
+        return judgement(case, request, answer, self.reply_group(case))
 
-    def reply_of(self, case: dict) -> str:
+    def program(self, case: dict, edition: str, options: dict):
+        raise NotImplementedError
+
+    def reply_group(self, case: dict) -> str:
+        raise NotImplementedError
+
+
+class ScenarioKind(LiveKind):
+    """Scenarios of one suite: its wire, its exchange rules and the vocabulary of its parameters, effects and
+    services (``behaviour``: the suite's exchanges file)."""
+
+    name = "scenario"
+
+    def program(self, case: dict, edition: str, options: dict) -> Program:
+        return Program(case["id"], case, self.exchanges, self.wire, edition, dict(options.get("params", {})),
+                       float(options.get("time_scale", 1.0)))
+
+    def reply_group(self, case: dict) -> str:
         """The message a scenario waits for first (where a malformed frame that names none is filed)."""
         for step in case["steps"]:
             for kind in ("expect", "sequence", "silence", "alive"):
