@@ -119,7 +119,8 @@ def admitted(suite: Suite, cases: list[Case], kinds: list[str], options: dict) -
             declined[reason].append(case.id)
         else:
             out.append(case)
-    notes = [f"{n} {kind} cases not run: the session runs {' and '.join(kinds)} cases" for kind, n in sorted(other.items())]
+    notes = [f"{sum(other.values())} cases not run ({', '.join(f'{n} {kind}' for kind, n in sorted(other.items()))}): "
+             f"the session runs {' and '.join(kinds)} cases"] if other else []
     notes += [f"{len(ids)} not run ({reason}): {', '.join(ids[:6])}{' ...' if len(ids) > 6 else ''}"
               for reason, ids in declined.items()]
     return out, notes
