@@ -65,9 +65,11 @@ def group_address(host: str) -> str | None:
 
 class UdpTransport:
     """One socket, bound to ``bind``, talking to ``target``; every wait bounded, every read at most one datagram
-    of at most 65,535 bytes, each timestamped on the monotonic clock on arrival."""
+    of at most 65,535 bytes, each timestamped on the monotonic clock on arrival. ``listen``: further ports of the
+    bind host to receive on, the first free one taken (a protocol's discovery ports: a node may announce itself
+    there rather than to its peers' own port); none free is no error."""
 
-    def __init__(self, target: tuple, bind: tuple, family: int):
+    def __init__(self, target: tuple, bind: tuple, family: int, listen=()):
         self.target, self.family = target, family
         self.sock = socket.socket(family, socket.SOCK_DGRAM)
         try:
@@ -77,6 +79,18 @@ class UdpTransport:
             raise ValueError(f"cannot bind {bind[0]}:{bind[1]}: {exc.strerror or exc}") from None
         self.sock.setblocking(False)
         self.address = self.sock.getsockname()
+        self.sockets = [self.sock]
+        for port in listen:
+            extra = socket.socket(family, socket.SOCK_DGRAM)
+            try:
+                extra.bind((bind[0], port))
+            except OSError:
+                extra.close()
+                continue
+            extra.setblocking(False)
+            self.sockets.append(extra)
+            break
+        self.listening = [s.getsockname()[1] for s in self.sockets[1:]]
         self.offset = time.time() - time.monotonic()
         self.dropped = 0  # datagrams from other hosts
 
@@ -97,11 +111,11 @@ class UdpTransport:
             wait = until - time.monotonic()
             if wait <= 0:
                 return None
-            ready, _, _ = select.select([self.sock], [], [], wait)
+            ready, _, _ = select.select(self.sockets, [], [], wait)
             if not ready:
                 return None
             try:
-                data, source = self.sock.recvfrom(MAX_DATAGRAM)
+                data, source = ready[0].recvfrom(MAX_DATAGRAM)
             except OSError:
                 continue  # e.g. ICMP port unreachable reported on the socket
             if source[0] != self.target[0]:
@@ -110,4 +124,5 @@ class UdpTransport:
             return time.monotonic(), data
 
     def close(self) -> None:
-        self.sock.close()
+        for sock in self.sockets:
+            sock.close()

@@ -88,6 +88,8 @@ class _Step:
     terminal: Parsed | None = None
     failures: dict = field(default_factory=dict)  # check -> first detail
     seen: list = field(default_factory=list)  # data already received, to tell duplicates
+    unmatched: str = ""  # the first reply whose echoed value was not the request's (it is not this step's)
+    unmatched_count: int = 0
 
 
 class Machine:
@@ -305,10 +307,20 @@ class Machine:
         if not isinstance(wanted, str) or parsed.message != wanted:
             return False
         exchange = self._exchange(step)
-        if exchange is None or parsed.decoded is None or "reply_when" not in exchange:
+        if exchange is None or parsed.decoded is None:
             return True
-        return all(any(same(parsed.fields.get(f), v) for v in resolved(self.wire, wanted, f, names, self.edition))
-                   for f, names in exchange["reply_when"].items())
+        if not all(any(same(parsed.fields.get(f), v) for v in resolved(self.wire, wanted, f, names, self.edition))
+                   for f, names in exchange.get("reply_when", {}).items()):
+            return False
+        request = self.sent[step.spec["reply_to"]].decoded.get("fields", {})
+        for rule in exchange["correlation"]:  # a reply that echoes another request's value is not this one's
+            if rule["kind"] == "echo" and not same(parsed.fields.get(rule["reply_field"]), request.get(rule["request_field"])):
+                if not step.unmatched:
+                    step.unmatched = (f"{rule['reply_field']}={show(parsed.fields.get(rule['reply_field']))}, "
+                                      f"the request's {rule['request_field']} was {show(request.get(rule['request_field']))}")
+                step.unmatched_count += 1
+                return False
+        return True
 
     def _exchange(self, step: _Step) -> dict | None:
         ref = step.spec.get("reply_to")
@@ -430,14 +442,14 @@ class Machine:
             malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
             refused = self.acks.get(spec.get("reply_to"))
             refused = f"; the call was refused: {refused}" if refused else ""
-            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}{refused}")
+            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}{refused}{_unmatched(step)}")
         self.timeline.append({"t": self._rel(t), "event": "timer", "step": spec["id"], "note": "the step's time is up"})
 
     def _judge_sequence(self, step: _Step, bound) -> None:
         spec = step.spec
         if not step.replies:
             malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
-            self._find(step, "", False, f"no {spec['sequence']} within {bound} s{malformed}")
+            self._find(step, "", False, f"no {spec['sequence']} within {bound} s{malformed}{_unmatched(step)}")
             return
         self._find(step, "", True, f"{len(step.replies)} {spec['sequence']} received")
         states = (self._exchange(step) or {}).get("state", {})
@@ -504,6 +516,14 @@ class Machine:
     def _terminal_name(self, step: _Step) -> str:
         states = (self._exchange(step) or {}).get("state", {})
         return self._state_name(step.spec["sequence"], states.get("field"), step.terminal.fields.get(states.get("field")))
+
+
+def _unmatched(step: _Step) -> str:
+    """What a failed step says of the replies it set aside because they echo another request."""
+    if not step.unmatched_count:
+        return ""
+    return (f"; {step.unmatched_count} {step.spec.get('expect') or step.spec.get('sequence')} set aside as another "
+            f"request's (e.g. {step.unmatched})")
 
 
 def _note(step: _Step, key: tuple, bad: str | None) -> None:

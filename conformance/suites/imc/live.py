@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ...sessions.datagram import DatagramSession
 from ...sessions.udp import UdpTransport, group_address, parse_endpoint, resolve
-from .peer import DEFAULT_SYSTEM, ImcPeer
+from .peer import DEFAULT_SYSTEM, DISCOVERY_PORTS, ImcPeer
 
 
 def open_target(suite, target: str, *, bind: str | None = None, src: int | None = None, dst: int | None = None,
@@ -23,7 +23,7 @@ def open_target(suite, target: str, *, bind: str | None = None, src: int | None 
     why = group_address(bind_address[0])
     if why and not allow_group:
         raise ValueError(f"--bind {bind}: {why} (--allow-multicast overrides)")
-    transport = UdpTransport(address, bind_address, family)
+    transport = UdpTransport(address, bind_address, family, listen=reversed(DISCOVERY_PORTS))  # 30100 left to the node
     own_host, own_port = transport.address[:2]
     shown = f"[{own_host}]" if ":" in own_host else own_host
     peer = ImcPeer(suite.defs, system=DEFAULT_SYSTEM if src is None else src, node=dst,

@@ -156,6 +156,10 @@ class ReferenceNode:
             state(PROCESSING, "BUSY")
             return
         progress, success, failure = plans[op]
+        if op in ("MSG", "MSG_SHORT") and f["msg"] is None:
+            if self.broken != "ignores-empty-msg":
+                state(PROCESSING, failure)  # nothing to send: the request cannot be fulfilled
+            return
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
         distance = self.peers.get(_text(f["system"]))
