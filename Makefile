@@ -9,7 +9,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test generate benchmark
+.PHONY: conformance test generate benchmark dune dune-conformance
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -21,3 +21,12 @@ generate: $(VENV)/.installed
 
 benchmark: $(VENV)/.installed
 	$(VENV)/bin/python -m imc_conformance.benchmark
+
+# DUNE (LSTS's IMC node) as a live target: built once from the imcpy sdist into the cache (10-30 min on 2 cores),
+# then the scenario set against it inside a private network namespace (needs root for unshare --net). Never in CI.
+dune: $(VENV)/.installed
+	$(VENV)/bin/python -m imc_conformance.suites.imc.dune build
+
+dune-conformance: dune
+	$(VENV)/bin/python -m imc_conformance.suites.imc.dune conformance
+

@@ -352,6 +352,9 @@ def build_parser() -> argparse.ArgumentParser:
     live_group.add_argument("--robustness", action="store_true",
                             help="also run the robustness phase: every corpus frame, then 10,000 garbage datagrams, "
                                  "after which every request kind answered before must still be answered")
+    live_group.add_argument("--replay-effects", action="store_true",
+                            help="with --robustness: also replay the corpus's accepted frames of messages with effects "
+                                 "(their destinations are the corpus's own: never against a real vehicle)")
     live_group.add_argument("--restart-cmd", metavar="CMD",
                             help="a command that restarts the target (split like a shell would, never run by one): "
                                  "lets the robustness phase bisect to the frame that silenced it")

@@ -14,7 +14,8 @@ from .kinds.scenario import options as vocabulary
 from .render.common import printable
 
 RESTART_TIMEOUT = 120.0  # seconds a --restart-cmd may take
-LIVE_FLAGS = ("target", "param", "allow_effects", "claims", "profile", "robustness", "restart_cmd", "dry_run")
+LIVE_FLAGS = ("target", "param", "allow_effects", "claims", "profile", "robustness", "restart_cmd", "replay_effects",
+              "dry_run")
 
 
 def system_id(text: str) -> int:
@@ -40,13 +41,20 @@ def options(args, suite, everything) -> dict:
         return {}
     if args.robustness and "robustness" not in suite.kinds:
         raise ValueError(f"--robustness: the suite {suite.name!r} has no robustness phase")
+    for flag, given in (("--robustness", args.robustness), ("--restart-cmd", args.restart_cmd is not None),
+                        ("--replay-effects", args.replay_effects)):
+        if given and not args.target:
+            raise ValueError(f"{flag} is for a live target: give --target udp://HOST:PORT")
+    if (args.restart_cmd is not None or args.replay_effects) and not args.robustness:
+        raise ValueError("--restart-cmd and --replay-effects are for the robustness phase: give --robustness too")
     out = {"params": vocabulary.parameters(behaviour, args.param),
            "effects": vocabulary.effects(behaviour, args.allow_effects),
            "time_scale": args.time_scale, "profile": suite.profile(args.profile or "seed"),
-           "robustness": args.robustness, "restart": bool(args.restart_cmd),
+           "robustness": args.robustness, "restart": bool(args.restart_cmd), "replay_effects": args.replay_effects,
            "corpus": tuple(c for c in everything if c.kind == "vector")}
     if args.restart_cmd is not None:
         restart_argv(args.restart_cmd)
+    _check_params(suite, everything, out["params"])
     if args.claims:
         from .files import read_json
         try:
@@ -55,6 +63,19 @@ def options(args, suite, everything) -> dict:
         except ValueError as exc:
             raise ValueError(f"--claims {args.claims}: {exc}") from exc
     return out
+
+
+def _check_params(suite, everything, params: dict) -> None:
+    """A usage error for a parameter that a live case's message cannot carry (a number too large for its field,
+    a name too long for a datagram), before anything is sent."""
+    if not params:
+        return
+    for case in everything:
+        if case.kind in ("scenario", "robustness") and set(case.data.get("needs", ())) & set(params):
+            problem = suite.live_problem(case.kind, case.data, params)
+            if problem:
+                given = ", ".join(f"{n}={params[n]}"[:60] for n in case.data["needs"] if n in params)
+                raise ValueError(f"--param {given}: {case.id}{problem[0]}: {problem[1]}"[:400])
 
 
 def notes(args, options: dict) -> list[str]:
@@ -95,7 +116,11 @@ def dry_run(suite, cases, args, options) -> int:
             print(f"{case.id}: the robustness phase: {len(phase.frames)} corpus frames in blocks of "
                   f"{phase.settings['block']}, then {phase.settings['garbage']} garbage datagrams; this probe, before, "
                   "after each block and after the garbage:")
-        for step, sent in planned_sends(program, addressing, 0.0):
+        sends = planned_sends(program, addressing, 0.0)
+        if not sends:
+            waits = [f"{k} {s[k]}" for s in program.scenario["steps"] for k in ("alive", "expect") if k in s]
+            print(f"{case.id}: sends nothing; waits for: {', '.join(waits)}")
+        for step, sent in sends:
             text = sent if isinstance(sent, str) else json.dumps({k: v for k, v in sent.items() if k != "header"})
             print(f"{case.id} {step}: {printable(text)}")
     return 0

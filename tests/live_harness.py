@@ -50,6 +50,7 @@ def run_virtual(suite, cases, edition=None, options=None, strict=False, kinds=("
     options.setdefault("corpus", tuple(c for c in cases if c.kind == "vector"))
     options.setdefault("robustness", "robustness" in kinds)
     options.setdefault("restart", restartable)
+    options.setdefault("replay_effects", "all" in options.get("effects", ()))
     result = run_cases(session, suite, scenario_cases(cases, kinds=kinds), edition=edition, adapter="virtual",
                        options=options, strict=strict, clock=link.now, started="2026-01-01T00:00:00+00:00")
     return result, link

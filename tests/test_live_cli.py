@@ -60,8 +60,13 @@ def node():
     (["--target", "udp://127.0.0.1:6002", "--param", "remote_system=abc"], "is an integer"),
     (["--target", "udp://127.0.0.1:6002", "--profile", "nope"], "unknown profile 'nope'"),
     (["--target", "udp://127.0.0.1:6002", "--allow-effects", "bogus"], "--allow-effects 'bogus'"),
-    (["--target", "udp://127.0.0.1:6002", "--restart-cmd", ""], "--restart-cmd is empty"),
-    (["--target", "udp://127.0.0.1:6002", "--restart-cmd", "'unbalanced"], "--restart-cmd cannot be split"),
+    (["--target", "udp://127.0.0.1:6002", "--robustness", "--restart-cmd", ""], "--restart-cmd is empty"),
+    (["--target", "udp://127.0.0.1:6002", "--robustness", "--restart-cmd", "'unbalanced"], "--restart-cmd cannot be split"),
+    (["--target", "udp://127.0.0.1:6002", "--restart-cmd", "restart-node"], "give --robustness too"),
+    (["--robustness"], "is for a live target"),
+    (["--target", "udp://127.0.0.1:6002", "--src", "0x10", "--dst", "0x10"], "needs an id of its own"),
+    (["--target", "udp://[::ffff:224.0.75.69]:6002"], "a multicast address"),
+    (["--target", "udp://127.0.0.1:6002", "--bind", "[::1]:0"], "not of the same address family"),
     (["--target", "udp://127.0.0.1:6002", "--adapter", "imcpy"], "not both"),
     (["--suite", "ros_acomms", "--target", "udp://127.0.0.1:6002"], "has no live targets"),
     (["--suite", "ros_acomms", "--robustness"], "the suite 'ros_acomms' has no robustness phase"),
@@ -77,12 +82,15 @@ def test_a_port_in_use_is_a_one_line_error(quiet_port, capsys):
     assert "Address already in use" in capsys.readouterr().err
     assert main(["serve", "--port", str(quiet_port)]) == 2
     assert "cannot listen on" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["serve", "--port", "70000"])
+    assert "a port is 0 to 65535" in capsys.readouterr().err
 
 
 def test_claims_files_are_checked(tmp_path, capsys):
     bad = tmp_path / "claims.json"
     for text, says in (("{", "not JSON"), ('{"services": ["telepathy"]}', "unknown service 'telepathy'"),
-                       ('["acoustic"]', 'expected {"services"')):
+                       ('["acoustic"]', 'expected {"services"'), ('{"services": [["acoustic"]]}', 'expected {"services"')):
         bad.write_text(text)
         assert main(["run", "--target", "udp://127.0.0.1:6002", "--claims", str(bad)]) == 2
         assert says in capsys.readouterr().err
@@ -98,21 +106,21 @@ def test_a_silent_target_is_inconclusive_and_exits_2(quiet_port, tmp_path, capsy
     assert "no valid frame from IMC node" in out
 
 
-def test_dry_run_prints_what_would_be_sent_and_sends_nothing(quiet_port, capsys):
+def test_dry_run_prints_what_would_be_sent_and_sends_nothing(capsys):
     listener = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     listener.bind(("127.0.0.1", 0))
     listener.settimeout(0.2)
     port = listener.getsockname()[1]
     try:
         assert main(["run", "--target", f"udp://127.0.0.1:{port}", "--dry-run", "--robustness", "--allow-effects",
-                     *PARAMS, "--message", "AcousticRequest"]) == 0
+                     *PARAMS, "--message", "AcousticRequest", "--message", "Heartbeat"]) == 0
         with pytest.raises(TimeoutError):
             listener.recvfrom(65535)
     finally:
         listener.close()
     out = capsys.readouterr().out
     assert "imc/AcousticRequest/scenario/range request:" in out and '"type": "RANGE"' in out
-    assert "the robustness phase:" in out
+    assert "the robustness phase:" in out and "imc/Heartbeat/robustness/still-served: sends nothing; waits for: alive" in out
 
 
 def test_list_scenarios_names_what_they_need(capsys):

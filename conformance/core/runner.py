@@ -81,7 +81,7 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
         cases = [c for c in cases if plans[c.id] and answered[c.id] == len(plans[c.id])]
         notes.insert(0, f"interrupted: {len(cases)} of {len(plans)} cases were done; the others are not in this result")
     untested, why = hello_gaps(suite, cases, edition, emits, plans)
-    notes += why
+    notes += why + list(getattr(session, "notes", ()))
     waivers = waivers or {}
     filed: dict[str, list[CaseResult]] = defaultdict(list)
     for case in cases:

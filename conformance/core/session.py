@@ -65,6 +65,8 @@ class Session(Protocol):
     @property
     def incidents(self) -> list: ...
 
+    # A session may also have ``notes``: what the report should say about how it went (read after the run).
+
     def close(self) -> None: ...
 
 

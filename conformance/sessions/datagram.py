@@ -20,11 +20,13 @@ class Transport(Protocol):
     def epoch(self, t: float) -> float:
         """Seconds since 1970 at clock time t."""
 
-    def send(self, data: bytes, address=None) -> None:
-        """To the target (``address`` None) or to another port of its host (discovery)."""
+    def send(self, data: bytes, address=None) -> str | None:
+        """To the target (``address`` None) or to another port of its host (discovery); why it could not be
+        sent, or None."""
 
-    def receive(self, until: float) -> tuple[float, bytes] | None:
-        """The next datagram from the target's host and when it arrived, or None once ``until`` has passed."""
+    def receive(self, until: float) -> tuple[float, bytes, tuple] | None:
+        """The next datagram from the target's host, when it arrived and where from, or None once ``until`` has
+        passed."""
 
     def close(self) -> None: ...
 
@@ -41,7 +43,8 @@ class Peer(Protocol):
 
     def due(self, t: float) -> list[tuple[object, bytes]]: ...
 
-    def observe(self, t: float, parsed) -> None: ...
+    def observe(self, t: float, parsed, from_target: bool) -> None:
+        """Something arrived (``from_target``: from the target's own address, not another port of its host)."""
 
     def accepts(self, parsed) -> bool:
         """Whether something that arrived is for the session (by its header), so the scenarios see it."""
@@ -57,6 +60,8 @@ class DatagramSession:
         self.transport, self.peer, self.wire, self._hello, self.startup = transport, peer, wire, hello, startup
         self.restart = restart
         self.name = hello["implementation"]
+        self.heard = 0  # valid frames from the target
+        self.unsent: list[str] = []  # why the session's own datagrams (announce, heartbeat) could not be sent
 
     def hello(self) -> dict:
         return self._hello
@@ -71,8 +76,8 @@ class DatagramSession:
             for job in jobs:
                 yield job, Answer("inconclusive", reason=why)
             return
-        conductor = Conductor(jobs, lambda job: job.request.params["program"],
-                              Addressing(self.peer.system, None, self.peer.node), self.transport.epoch)
+        conductor = self.conductor = Conductor(jobs, lambda job: job.request.params["program"],
+                                               Addressing(self.peer.system, None, self.peer.node), self.transport.epoch)
         self._transmit(conductor.start(self.transport.now()))
         while True:
             while conductor.finished:
@@ -110,21 +115,36 @@ class DatagramSession:
         got = self.transport.receive(until)
         t = self.transport.now()
         if got is not None:
-            parsed = self.wire.parse(got[1])
-            self.peer.observe(got[0], parsed)
+            arrived, data, source = got
+            parsed = self.wire.parse(data)
+            self.heard += parsed.decoded is not None
+            self.peer.observe(arrived, parsed, tuple(source) == tuple(self.transport.target[:2]))
             if conductor is not None and self.peer.accepts(parsed):
-                self._transmit(conductor.deliver(got[0], parsed))
+                self._transmit(conductor.deliver(arrived, parsed))
         if conductor is not None:
             self._transmit(conductor.wake(t))
         self._send(self.peer.due(t))
 
     def _transmit(self, outgoing) -> None:
-        for item in outgoing:
-            self.transport.send(item.composed.data)
+        for item in list(outgoing):
+            why = self.transport.send(item.composed.data)
+            if why:  # the scenario cannot go on; the node is not to blame
+                self._transmit(self.conductor.undeliverable(self.transport.now(), item.job, why))
 
     def _send(self, datagrams) -> None:
         for address, data in datagrams:
-            self.transport.send(data, address)
+            why = self.transport.send(data, address)
+            if why and why not in self.unsent:
+                self.unsent.append(why)
+
+    @property
+    def notes(self) -> list[str]:
+        """What the report should say about the link."""
+        out = list(getattr(self.transport, "notes", []))
+        out += [f"the session's own announce or heartbeat: {why}" for why in self.unsent[:3]]
+        if not self.heard:
+            out.append(f"no valid frame ever came from {self.name}: check the address and port")
+        return out
 
     def close(self) -> None:
         self.transport.close()

@@ -7,6 +7,7 @@ never reach a real vehicle by accident. Datagrams from any other host than the t
 
 from __future__ import annotations
 
+import errno
 import ipaddress
 import select
 import socket
@@ -49,18 +50,32 @@ def resolve(host: str, port: int, what: str) -> tuple[int, tuple]:
 
 
 def group_address(host: str) -> str | None:
-    """Why ``host`` (a numeric address) is not a unicast address, or None."""
+    """Why ``host`` (a numeric address) is not a unicast address, or None. (A subnet's directed broadcast address
+    cannot be told from a host's without the netmask: the send then fails, and says so.)"""
     try:
         ip = ipaddress.ip_address(host.split("%")[0])
     except ValueError:
         return None
+    ip = getattr(ip, "ipv4_mapped", None) or ip
     if ip.is_multicast:
         return "a multicast address"
-    if ip.version == 4 and (ip == ipaddress.IPv4Address("255.255.255.255") or str(ip).endswith(".255")):
+    if ip == ipaddress.IPv4Address("255.255.255.255"):
         return "a broadcast address"
     if ip.is_unspecified:
         return "the unspecified address"
     return None
+
+
+def route_source(family: int, target: tuple) -> str:
+    """The local address the system would send to ``target`` from (a route lookup: nothing is sent)."""
+    probe = socket.socket(family, socket.SOCK_DGRAM)
+    try:
+        probe.connect(target)
+        return probe.getsockname()[0]
+    except OSError as exc:
+        raise ValueError(f"no route to {target[0]}: {exc.strerror or exc}") from None
+    finally:
+        probe.close()
 
 
 class UdpTransport:
@@ -71,6 +86,8 @@ class UdpTransport:
 
     def __init__(self, target: tuple, bind: tuple, family: int, listen=()):
         self.target, self.family = target, family
+        if (":" in bind[0]) != (family == socket.AF_INET6):
+            raise ValueError(f"--bind {bind[0]} and the target {target[0]} are not of the same address family")
         self.sock = socket.socket(family, socket.SOCK_DGRAM)
         try:
             self.sock.bind(bind)
@@ -93,6 +110,7 @@ class UdpTransport:
         self.listening = [s.getsockname()[1] for s in self.sockets[1:]]
         self.offset = time.time() - time.monotonic()
         self.dropped = 0  # datagrams from other hosts
+        self.send_errors: dict[str, int] = {}  # transient send errors (the node's port closed, buffers full), by kind
 
     def now(self) -> float:
         return time.monotonic()
@@ -100,13 +118,19 @@ class UdpTransport:
     def epoch(self, t: float) -> float:
         return self.offset + t
 
-    def send(self, data: bytes, address=None) -> None:
+    def send(self, data: bytes, address=None) -> str | None:
+        """Send one datagram; why it could not be sent, or None. A closed port (an earlier ICMP error) or full
+        buffers are counted and not reported: the scenarios' bounds judge the silence that follows."""
         try:
             self.sock.sendto(data, self.target if address is None else address)
-        except OSError:
-            pass  # an unreachable port (ICMP) or a full buffer: the scenario's bounds judge the silence
+        except OSError as exc:
+            if exc.errno in (errno.ECONNREFUSED, errno.ENOBUFS, errno.EAGAIN):
+                self.send_errors[exc.strerror] = self.send_errors.get(exc.strerror, 0) + 1
+                return None
+            return f"cannot send {len(data)} bytes to {(address or self.target)[0]}: {exc.strerror or exc}"
+        return None
 
-    def receive(self, until: float) -> tuple[float, bytes] | None:
+    def receive(self, until: float) -> tuple[float, bytes, tuple] | None:
         while True:
             wait = until - time.monotonic()
             if wait <= 0:
@@ -121,7 +145,14 @@ class UdpTransport:
             if source[0] != self.target[0]:
                 self.dropped += 1
                 continue
-            return time.monotonic(), data
+            return time.monotonic(), data, source[:2]
+
+    @property
+    def notes(self) -> list[str]:
+        """What a report should say about the link."""
+        out = [f"{self.dropped} datagrams from hosts other than the target's were dropped"] if self.dropped else []
+        out += [f"{n} datagrams could not be sent ({why})" for why, n in self.send_errors.items()]
+        return out
 
     def close(self) -> None:
         for sock in self.sockets:

@@ -22,12 +22,17 @@ class VirtualLink:
     def epoch(self, t: float) -> float:
         return self.epoch0 + t
 
-    def send(self, data: bytes, address=None) -> None:
+    def send(self, data: bytes, address=None) -> str | None:
         self.sent.append(bytes(data))
         if address is None or tuple(address) == self.node_address:
             self.node.receive(self.t, bytes(data), self.own_address)
+        return None
 
-    def receive(self, until: float) -> tuple[float, bytes] | None:
+    @property
+    def target(self) -> tuple:
+        return self.node_address
+
+    def receive(self, until: float) -> tuple[float, bytes, tuple] | None:
         while not self.inbox:
             deadline = self.node.deadline
             if deadline is None or deadline > until:
@@ -36,7 +41,7 @@ class VirtualLink:
             self.t = max(self.t, deadline)
             for address, data in self.node.due(self.t):
                 if tuple(address) == self.own_address:
-                    self.inbox.append((self.t, data))
+                    self.inbox.append((self.t, data, self.node_address))
         return self.inbox.popleft()
 
     def close(self) -> None:

@@ -38,15 +38,16 @@ class DataSuite(Suite):
         path = self.data("statements.json")
         return json.loads(path.read_text(encoding="utf-8"))["statements"] if path.exists() else []
 
-    def live_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
+    def live_problem(self, kind: str, case: dict, params: dict | None = None) -> tuple[str, str] | None:
         """The first problem of a scenario (or robustness probe) the definitions and the exchanges file can see:
-        a message, field, value, parameter, effect, service, step or statement they lack."""
+        a message, field, value, parameter, effect, service, step or statement they lack; with ``params`` (a
+        run's), also a parameter its messages cannot carry."""
         from ..kinds.robustness.kind import as_scenario
         from ..kinds.scenario.lint import lint_scenario
 
         wire = self.wire
         return lint_scenario(case if kind == "scenario" else as_scenario(case), wire, self.behaviour, self.editions,
-                             wire.knows, wire.fields_of, {s["id"]: s for s in self.statements})
+                             wire.knows, wire.fields_of, {s["id"]: s for s in self.statements}, params)
 
     def profile(self, name: str) -> dict:
         """A profile of the folder, else of the packaged data, checked against its schema."""

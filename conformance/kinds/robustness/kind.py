@@ -37,16 +37,17 @@ class RobustnessKind(LiveKind):
         """The phase every probe of a run shares: one per run (its options object) and edition."""
         if self._last is not None and self._last[0] is options and self._last[1] == edition:
             return self._last[2]
-        frames, skipped = self.frames(options.get("corpus", ()), edition, options.get("effects", set()))
+        frames, skipped = self.frames(options.get("corpus", ()), edition, bool(options.get("replay_effects")))
         phase = Phase(frames, skipped, self.settings, self.wire, self.exchanges, edition,
                       dict(options.get("params", {})), float(options.get("time_scale", 1.0)), bool(options.get("restart")))
         self._last = (options, edition, phase)  # holding the options keeps the identity test sound
         return phase
 
-    def frames(self, corpus, edition: str, allowed: set[str]) -> tuple[list[Frame], list[str]]:
+    def frames(self, corpus, edition: str, replay_effects: bool) -> tuple[list[Frame], list[str]]:
         """Every frame of the byte vectors of ``edition``, in corpus order, but those too large for one datagram
-        and the accepted frames of requests whose effects the run does not allow; and why each group was left
-        out."""
+        and, unless ``replay_effects``, the accepted frames of messages with effects (their destinations are the
+        corpus's own: an SMS number, an Iridium or IMC system a real node would reach); and why each group was
+        left out."""
         limit, never = self.settings["datagram_limit"], self.settings["never_replayed"]
         effects = self.behaviour.get("message_effects", {})
         out, too_large, barred = [], [], {}
@@ -59,9 +60,9 @@ class RobustnessKind(LiveKind):
                 if len(data) > limit:
                     too_large.append(f"{case.id} ({encoding})")
                     continue
-                blocked = [e for e in effects.get(case.group, ()) if e not in allowed and "all" not in allowed]
+                blocked = [] if replay_effects else effects.get(case.group, [])
                 if expect != "invalid" and (blocked or case.group in never):
-                    why = never.get(case.group) or f"effects not allowed: {', '.join(blocked)}"
+                    why = never.get(case.group) or f"{', '.join(blocked)}; --replay-effects replays them"
                     barred.setdefault(why, []).append(case.id)
                     continue
                 out.append(Frame(case.id, encoding, expect, data))

@@ -97,6 +97,7 @@ class Probe:
     silenced: str | None = None  # after what it stopped answering ("block 3 of 37 (frames ...)", "the garbage")
     block: int | None = None
     bisected: str | None = None
+    error: str | None = None  # why its request cannot be sent
 
 
 @dataclass(frozen=True)
@@ -129,7 +130,6 @@ class PhaseMachine:
         self.done = False
         self.restart_wanted = False
         self.waiting: _Wait | None = None
-        self.error: str | None = None
         self._script = None
 
     # ------------------------------------------------------------------ driving the script
@@ -163,6 +163,13 @@ class PhaseMachine:
         if self.done or self.waiting is None or t < self.waiting.until:
             return []
         return self._resume(t, epoch, None)
+
+    def cannot_run(self, t: float, why: str) -> None:
+        """The session could not send what the phase sent: every probe is untested (not the node's fault)."""
+        for probe in self.probes:
+            probe.error = probe.error or why
+        self._log("stopped", why)
+        self.done, self.waiting = True, None
 
     def restarted(self, t: float, epoch: float, problem: str | None) -> list[Composed]:
         self.restart_wanted = False
@@ -200,7 +207,8 @@ class PhaseMachine:
         blocks = [phase.frames[i:i + settings["block"]] for i in range(0, len(phase.frames), settings["block"])]
         for k, block in enumerate(blocks, 1):
             if not self._listening():
-                self._log("phase", f"every probe is silenced: blocks {k} to {len(blocks)} not sent")
+                why = "every probe is silenced" if any(p.baseline for p in self.probes) else "no probe was answered before"
+                self._log("phase", f"{why}: blocks {k} to {len(blocks)} not sent")
                 break
             yield from self._replay(block)
             self._log("block", f"block {k} of {len(blocks)} sent: {_span(block)}")
@@ -239,16 +247,20 @@ class PhaseMachine:
         candidates = block
         while True:
             problem = yield _Restart()
+            if problem is None and (yield from self._round(probes, "after a restart, before bisecting further")):
+                problem = "after a restart the node did not serve the probe again"
             if problem is not None:
+                for probe in probes:
+                    probe.bisected = f"not bisected: {problem}"
                 self._log("restart", f"cannot bisect: {problem}")
                 return
-            yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
             half = candidates[:max(1, len(candidates) // 2)] if len(candidates) > 1 else candidates
             yield from self._replay(half)
             silent = bool((yield from self._round(probes, f"bisecting: after {_span(half)}")))
             if len(candidates) == 1:
-                what = (f"the frame {_name(half[0])} alone silences it" if silent else
-                        f"no single frame does it alone: the block as a whole does (last candidate {_name(half[0])})")
+                what = (f"bisected: the frame {_name(half[0])} alone silences it" if silent else
+                        f"bisected: no single frame does it alone, the block as a whole does (last candidate "
+                        f"{_name(half[0])})")
                 for probe in probes:
                     probe.bisected = what
                 self._log("bisect", what)
@@ -294,16 +306,16 @@ class PhaseMachine:
         """(what accepts the reply, the request to send or None) for one try of a probe."""
         if "alive" in spec:
             wanted = spec["alive"]
-            return (lambda p: (wanted is None or p.message == wanted) and self._from_node(p)), None
+            return (lambda p: (wanted is None or p.message == wanted) and self.addressing.from_node(self.wire, p)), None
         scope = Scope(dict(self.phase.params), self.unique, self.epoch,
                       addresses={"system": self.addressing.system, "node": self.addressing.node})
         try:
             message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
-        except Unresolved as exc:
-            self.error = str(exc)
+            composed = self.wire.compose(message, spec.get("encoding"), self.addressing, self.epoch, "probe",
+                                         self.phase.edition)
+        except (Unresolved, ValueError) as exc:
+            probe.error = f"the probe cannot be sent: {exc}"
             return (lambda p: False), None
-        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, self.epoch, "probe",
-                                     self.phase.edition)
         exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
         echoes = [(r["reply_field"], composed.decoded["fields"].get(r["request_field"]))
                   for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo"]
@@ -312,16 +324,12 @@ class PhaseMachine:
         me = (self.addressing.system, self.addressing.entity)
 
         def accepts(p: Parsed) -> bool:
-            if p.message != spec["expect"] or not self._from_node(p):
+            if p.message != spec["expect"] or not self.addressing.from_node(self.wire, p):
                 return False
             if echoes:
                 return all(same(p.fields.get(f), v) for f, v in echoes)
             return tuple(self.wire.destination(p) or ()) == me
         return accepts, composed
-
-    def _from_node(self, parsed: Parsed) -> bool:
-        origin = self.wire.origin(parsed)
-        return origin is None or self.addressing.node is None or origin[0] == self.addressing.node
 
     def _node(self) -> int:
         return 0xFFFF if self.addressing.node is None else self.addressing.node
@@ -333,29 +341,30 @@ class PhaseMachine:
         case = probe.program.case
         clause, level = case["clause"], case.get("level", "MUST")
         what = case["probe"].get("expect") or case["probe"].get("alive") or "a frame"
-        if self.error:
+        if probe.error:
             findings = []
         elif not probe.baseline:
-            findings = [{"check": "baseline", "passed": False, "inconclusive": True, "level": level, "clause": clause,
+            findings = [{"check": "probe:baseline", "passed": False, "inconclusive": True, "level": level, "clause": clause,
                          "detail": f"no {what} before the robustness phase either: its scenarios judge that; whether "
                                    "the target survives the corpus cannot be told from this probe"}]
         else:
             corpus = probe.block is None
             garbage_ok = probe.silenced is None
-            findings = [{"check": "baseline", "passed": True, "level": level, "clause": clause,
+            findings = [{"check": "probe:baseline", "passed": True, "level": level, "clause": clause,
                          "detail": f"{what} received before the robustness phase"}]
             skipped = f" ({'; '.join(self.phase.skipped)} left out)" if self.phase.skipped else ""
-            detail = (f"{what} still received after each block of {len(self.phase.frames)} corpus frames{skipped}" if corpus else
-                      f"no {what} after {probe.silenced}" + (f"; bisected: {probe.bisected}" if probe.bisected else
-                                                              "; give --restart-cmd to bisect to the frame"))
-            findings.append({"check": "corpus", "passed": corpus, "level": level, "clause": clause, "detail": detail})
+            blocks = -(-len(self.phase.frames) // self.phase.settings["block"])
+            detail = (f"{what} still received after each of the {blocks} blocks ({len(self.phase.frames)} corpus frames)"
+                      f"{skipped}" if corpus else f"no {what} after {probe.silenced}"
+                      + (f"; {probe.bisected}" if probe.bisected else "; give --restart-cmd to bisect to the frame"))
+            findings.append({"check": "probe:corpus", "passed": corpus, "level": level, "clause": clause, "detail": detail})
             if corpus:
-                findings.append({"check": "garbage", "passed": garbage_ok, "level": level, "clause": clause,
+                findings.append({"check": "probe:garbage", "passed": garbage_ok, "level": level, "clause": clause,
                                  "detail": f"{what} still received after the garbage burst" if garbage_ok
                                  else f"no {what} after {probe.silenced}"})
         timeline = [e for e in self.timeline if e.get("probe") in (None, member)]
         return {"findings": findings, "timeline": [{k: v for k, v in e.items() if k != "probe"} for e in timeline],
-                "frames": self.frames_seen if member == 0 else [], "error": self.error}
+                "frames": self.frames_seen if member == 0 else [], "error": probe.error}
 
     def _log(self, event: str, note: str, probe: Probe | None = None) -> None:
         entry = {"t": self._rel(self.now), "event": event, "note": note}

@@ -126,10 +126,12 @@ class Conductor:
                 out += self._sent(job, machine, machine.restarted(t, self.epoch(t), problem))
         return out + self._reap(t)
 
-    def abandon(self) -> list[tuple[object, object]]:
-        """Every job not finished (the run was stopped), with its machine if it was running."""
-        return ([(self.jobs[j], self.running[k]) for k in self.running for j in self.members[k]]
-                + [(self.jobs[j], None) for j in self.pending])
+    def undeliverable(self, t: float, job, why: str) -> list[Outgoing]:
+        """What a job's machine sent could not be sent (``why``): it stops, unable to run (INCONCLUSIVE)."""
+        for key, machine in self.running.items():
+            if any(self.jobs[m] is job for m in self.members[key]):
+                machine.cannot_run(t, why)
+        return self._reap(t)
 
     def _owner(self, parsed) -> int | None:
         """The machine a reply belongs to: the one whose request it echoes (the latest to send such a request),

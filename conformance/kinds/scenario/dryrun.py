@@ -5,7 +5,7 @@ from __future__ import annotations
 import itertools
 
 from .machine import Program
-from .values import Scope, Unresolved, resolve_message
+from .values import Scope, Unresolved, resolve_message, resolve_plain
 from .wire import Addressing
 
 
@@ -16,6 +16,13 @@ def planned_sends(program: Program, addressing: Addressing, epoch: float) -> lis
                   addresses={"system": addressing.system, "node": addressing.node})
     out = []
     for step in program.scenario["steps"]:
+        if "setup" in step:
+            try:
+                state = resolve_plain(step["setup"]["state"], scope)
+            except Unresolved as exc:
+                state = f"cannot be built before the run: {exc}"
+            out.append((step["id"], {"setup": step["setup"]["service"], "state": state}))
+            continue
         if "send" not in step:
             continue
         try:

@@ -12,16 +12,18 @@ WAITS = ("expect", "sequence", "silence", "alive")
 
 
 def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
-                  statements: dict) -> tuple[str, str] | None:
+                  statements: dict, params: dict | None = None) -> tuple[str, str] | None:
     """(JSON path suffix, problem) for the first problem of ``case``, or None. ``known(message)``: whether the
     suite has the message; ``fields_of(message)``: its field names; ``statements``: the suite's behavioural
-    statements by id (a step may cover only a testable one)."""
+    statements by id (a step may cover only a testable one); ``params``: a run's parameters, to check that its
+    messages can carry them (else each parameter's example)."""
     for i, step in enumerate(case["steps"]):
-        for j, sid in enumerate(step.get("covers", ())):
-            if sid not in statements:
-                return f".steps[{i}].covers[{j}]", f"{sid!r} is not a statement of statements.json"
-            if "untestable" in statements[sid]:
-                return f".steps[{i}].covers[{j}]", f"{sid!r} is marked untestable in statements.json"
+        for key in ("covers", "exercises"):
+            for j, sid in enumerate(step.get(key, ())):
+                if sid not in statements:
+                    return f".steps[{i}].{key}[{j}]", f"{sid!r} is not a statement of statements.json"
+                if "untestable" in statements[sid]:
+                    return f".steps[{i}].{key}[{j}]", f"{sid!r} is marked untestable in statements.json"
     for key, vocabulary in (("needs", "params"), ("effects", "effects")):
         for i, name in enumerate(case.get(key, ())):
             if name not in behaviour[vocabulary]:
@@ -34,15 +36,16 @@ def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
     if unknown:
         return ".expect", f"unknown edition {sorted(unknown)[0]!r}"
     for edition in applies:
-        problem = _lint_steps(case, wire, behaviour, edition, known, fields_of)
+        problem = _lint_steps(case, wire, behaviour, edition, known, fields_of, params)
         if problem:
             return problem
     return None
 
 
-def _lint_steps(case, wire, behaviour, edition, known, fields_of):
+def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
     examples = {name: int(p["example"], 0) if p["type"] == "integer" else p["example"]
                 for name, p in behaviour["params"].items()}
+    examples.update(params or {})
     scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2})
     program = Program(case["id"], case, tuple(behaviour["exchanges"]), wire, edition, examples)
     seen, sends = set(), {}

@@ -198,15 +198,14 @@ class Machine:
             if kind in ("send", "setup"):
                 try:
                     out.append(self._send(t, epoch, spec) if kind == "send" else self._setup(t, spec))
-                except Unresolved as exc:
-                    self.error = str(exc)
-                    self._stop(t, str(exc))
+                except (Unresolved, ValueError) as exc:  # a value the run gave that the message cannot carry
+                    self.error = f"step {spec['id']} cannot be sent: {exc}"
+                    self._stop(t, self.error)
                 continue
             if kind == "accepted" and spec["accepted"] in self.acks:
                 self._on_accepted(t, self.step, self.acks[spec["accepted"]])
                 continue
-            bound = spec.get("within", spec.get("for", spec.get("wait")))
-            self.step.until = t + self._bound(bound)
+            self.step.until = t + self._bound(_length(spec))
             held = [p for p in self.backlog if self._answered_step(p) == spec.get("reply_to")]
             if held:
                 self.backlog = [p for p in self.backlog if p not in held]
@@ -267,7 +266,8 @@ class Machine:
         self.sent[spec["id"]] = composed
         self.scope.sent[spec["id"]] = composed.decoded.get("fields", {})
         exchange = self.program.exchange_for(message)
-        echoes = tuple((r["reply_field"], hashable(message["fields"][r["request_field"]]))
+        sent = composed.decoded.get("fields", {})
+        echoes = tuple((r["reply_field"], hashable(sent.get(r["request_field"])))
                        for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo")
         if echoes:
             self.keys.append((exchange["reply"], echoes))
@@ -276,7 +276,7 @@ class Machine:
 
     def _finished(self, t: float, step: _Step) -> bool:
         if step.kind == "expect":
-            return len(step.replies) >= step.spec.get("count", 1) or bool(step.failures)
+            return len(step.replies) >= step.spec.get("count", 1)
         if step.kind == "alive":
             return bool(step.replies)
         return False  # sequence, silence and wait end at their deadline; accepted at its acknowledgement
@@ -288,6 +288,12 @@ class Machine:
 
     def _must_failed(self) -> bool:
         return any(not f.passed and f.level == "MUST" for f in self.findings)
+
+    def cannot_run(self, t: float, why: str) -> None:
+        """The session could not send what the scenario sent: it stops, untested (not the node's fault)."""
+        if not self.done:
+            self.error = why
+            self._stop(t, why)
 
     def _stop(self, t: float, why: str) -> None:
         self.timeline.append({"t": self._rel(t), "event": "stopped", "note": why})
@@ -301,8 +307,7 @@ class Machine:
             wanted = spec["alive"]
             if parsed.decoded is None or (wanted and parsed.message != wanted):
                 return False
-            origin = self.wire.origin(parsed)
-            return origin is None or self.addressing.node is None or origin[0] == self.addressing.node
+            return self.addressing.from_node(self.wire, parsed)
         wanted = spec.get(step.kind) if step.kind != "wait" else None
         if not isinstance(wanted, str) or parsed.message != wanted:
             return False
@@ -334,23 +339,19 @@ class Machine:
         exchange = self._exchange(step)
         if exchange is None:
             return []
-        request = self.sent[step.spec["reply_to"]].decoded.get("fields", {})
         out = []
         for rule in exchange["correlation"]:
             kind = rule["kind"]
             if kind == "echo":
-                name = f"echo-{rule['reply_field']}"
-                want, got = request.get(rule["request_field"]), parsed.fields.get(rule["reply_field"])
-                bad = None if same(got, want) else f"{rule['reply_field']} is {show(got)}, the request's {rule['request_field']} was {show(want)}"
-            elif kind == "to-requester":
+                continue  # a reply that does not echo is set aside as another request's (``_candidate``)
+            if kind == "to-requester":
                 name = kind
                 to, me = self.wire.destination(parsed), (self.addressing.system, self.addressing.entity)
                 bad = None if to is None or tuple(to) == me else f"addressed to {_address(to)}, the requester is {_address(me)}"
             else:
                 name = kind
-                origin = self.wire.origin(parsed)
-                node = self.addressing.node
-                bad = None if origin is None or node is None or origin[0] == node else f"sent by system {origin[0]}, the node is {node}"
+                bad = None if self.addressing.from_node(self.wire, parsed) else \
+                    f"sent by system {self.wire.origin(parsed)[0]}, the node is {self.addressing.node}"
             out.append((name, rule["level"], rule["clause"], bad))
         return out
 
@@ -424,7 +425,7 @@ class Machine:
     def _expire(self, t: float, step: _Step) -> None:
         """The step's time is up: judge what it gathered."""
         spec, kind = step.spec, step.kind
-        bound = spec.get("within", spec.get("for", spec.get("wait")))
+        bound = _length(spec)
         if kind == "wait":
             pass
         elif kind == "silence":
@@ -516,6 +517,11 @@ class Machine:
     def _terminal_name(self, step: _Step) -> str:
         states = (self._exchange(step) or {}).get("state", {})
         return self._state_name(step.spec["sequence"], states.get("field"), step.terminal.fields.get(states.get("field")))
+
+
+def _length(spec: dict):
+    """How long a waiting step lasts, in seconds of the scenario (before --time-scale)."""
+    return spec.get("within", spec.get("for", spec.get("wait")))
 
 
 def _unmatched(step: _Step) -> str:

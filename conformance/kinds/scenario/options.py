@@ -35,7 +35,8 @@ def effects(behaviour: dict, text: str | None) -> set[str]:
 
 def claims(behaviour: dict, doc) -> set[str]:
     """The services a claims document (``{"services": [...]}``) says the target implements."""
-    if not isinstance(doc, dict) or not isinstance(doc.get("services"), list) or set(doc) - {"services", "description"}:
+    if (not isinstance(doc, dict) or not isinstance(doc.get("services"), list) or set(doc) - {"services", "description"}
+            or not all(isinstance(s, str) for s in doc["services"])):
         raise ValueError('expected {"services": [NAME, ...]} (optionally with "description")')
     unknown = [s for s in doc["services"] if s not in behaviour["services"]]
     if unknown:

@@ -50,8 +50,11 @@ class Scope:
         if step not in source:
             raise Unresolved(f"{key} {arg}: step {step!r} has {'sent' if key == '$sent' else 'matched'} nothing")
         value = source[step]
-        for part in path.split(".") if path else ():
-            value = value[int(part)] if isinstance(value, list) else value[part]
+        try:
+            for part in path.split(".") if path else ():
+                value = value[int(part)] if isinstance(value, list) else value[part]
+        except (KeyError, IndexError, ValueError, TypeError):
+            raise Unresolved(f"{key} {arg}: no such field in what step {step!r} {'sent' if key == '$sent' else 'matched'}") from None
         return value
 
 

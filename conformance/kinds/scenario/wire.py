@@ -20,6 +20,12 @@ class Addressing:
     entity: int | None = None
     node: int | None = None
 
+    def from_node(self, wire, parsed) -> bool:
+        """Whether something arrived from the node (true where the protocol has no addresses, or the node's id is
+        not known yet)."""
+        origin = wire.origin(parsed)
+        return origin is None or self.node is None or origin[0] == self.node
+
 
 @dataclass(frozen=True)
 class Parsed:

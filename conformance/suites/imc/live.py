@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ...sessions.datagram import DatagramSession
-from ...sessions.udp import UdpTransport, group_address, parse_endpoint, resolve
+from ...sessions.udp import UdpTransport, group_address, parse_endpoint, resolve, route_source
 from .peer import DEFAULT_SYSTEM, DISCOVERY_PORTS, ImcPeer
 
 
@@ -13,12 +13,12 @@ def open_target(suite, target: str, *, bind: str | None = None, src: int | None 
     reason for a malformed URL, a group address, a host that does not resolve or a bind that fails."""
     host, port = parse_endpoint(target, "--target")
     family, address = resolve(host, port, "--target")
-    for what, text, ip in (("--target", target, address[0]),):
-        why = group_address(ip)
-        if why and not allow_group:
-            raise ValueError(f"{what} {text}: {why}; a run talks to one node (--allow-multicast overrides)")
-    loopback = "::1" if ":" in address[0] else "127.0.0.1"
-    bind_host, bind_port = parse_endpoint(bind, "--bind", default_port=0) if bind else (loopback, 0)
+    why = group_address(address[0])
+    if why and not allow_group:
+        raise ValueError(f"--target {target}: {why}; a run talks to one node (--allow-multicast overrides)")
+    if src is not None and src == dst:
+        raise ValueError(f"--src and --dst are both {src:#06x}: the session needs an id of its own")
+    bind_host, bind_port = parse_endpoint(bind, "--bind", default_port=0) if bind else (route_source(family, address), 0)
     _, bind_address = resolve(bind_host, bind_port, "--bind")
     why = group_address(bind_address[0])
     if why and not allow_group:

@@ -59,11 +59,13 @@ class ImcPeer:
         header = parsed.decoded["header"]
         return header["src"] != self.system and header["dst"] in (self.system, 0xFFFF, 0)
 
-    def observe(self, t: float, parsed) -> None:
+    def observe(self, t: float, parsed, from_target: bool) -> None:
+        """Learn the node's id from its first valid frame from the target's own address (not from whatever else
+        runs on its host: its discovery traffic, other IMC programs)."""
         if parsed.decoded is None:
             return
         src = parsed.decoded["header"]["src"]
-        if self.node is None and src != self.system:
+        if self.node is None and src != self.system and from_target:
             self.node = src
         if src == self.node:
             self.ready = True

@@ -12,6 +12,7 @@ from .crc16 import crc16
 from .definitions import Definitions, MessageDef
 
 UNKNOWN_SYSTEM, UNKNOWN_ENTITY = 0xFFFF, 0xFF
+DATAGRAM_LIMIT = 65507  # bytes an IPv4 UDP datagram carries
 
 
 class ImcWire:
@@ -28,6 +29,8 @@ class ImcWire:
         header.update(message.get("header", {}))
         frame = codec.encode(self.defs, {"abbrev": message["abbrev"], "header": header, "fields": message["fields"]},
                              encoding or "le")
+        if len(frame) > DATAGRAM_LIMIT:
+            raise ValueError(f"the {message['abbrev']} frame is {len(frame)} bytes: one UDP datagram carries {DATAGRAM_LIMIT}")
         return Composed(frame, codec.decode(self.defs, frame), message["abbrev"], encoding or "le", {"step": step})
 
     def parse(self, data: bytes) -> Parsed:

@@ -27,6 +27,7 @@ BREAKS = {
     "ignores-max-size": "a QUERY's reply carries all the kept data, whatever max_size says (a SHOULD)",
     "transmits-logged-samples": "historic samples of priority -127 are kept for transmission (a SHOULD)",
     "ignores-remote-commands": "a RemoteCommand addressed to the node is not executed (a SHOULD)",
+    "acknowledges-set-cfg": "SET_CFG is answered with a CUR_CFG (a SHOULD: deployed nodes store it silently)",
     "ignores-empty-msg": "an AcousticOperation MSG without a message goes unanswered (as DUNE's CommManager, which dies on it)",
     "leaks-on-drop": "after 5,000 datagrams it could not decode, no request is served (caught by --robustness)",
 }

@@ -129,6 +129,9 @@ class ReferenceNode:
         op = message["fields"]["op"]
         if op == self._v("LblConfig", "op", "SET_CFG"):
             self.beacons = list(message["fields"]["beacons"])
+            if self.broken == "acknowledges-set-cfg":
+                self._reply(t, PROCESSING, message, "LblConfig", {"op": self._v("LblConfig", "op", "CUR_CFG"),
+                                                                  "beacons": self.beacons})
         elif op == self._v("LblConfig", "op", "GET_CFG") and self.broken != "no-cur-cfg":
             beacons = self.beacons[:-1] if self.broken == "other-beacons" else self.beacons
             self._reply(t, PROCESSING, message, "LblConfig", {"op": self._v("LblConfig", "op", "CUR_CFG"), "beacons": beacons})

@@ -18,7 +18,7 @@ def add_command(sub, suite_loader) -> None:
                                        "acoustic channel and fake Iridium/SMS gateways. It answers only systems that "
                                        "announce an imc+udp service to it, and announces by unicast only.")
     serve.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
-    serve.add_argument("--port", type=int, default=6002, help="UDP port (default 6002, DUNE's)")
+    serve.add_argument("--port", type=port_number, default=6002, help="UDP port (default 6002, DUNE's; 0: any free)")
     serve.add_argument("--system", default="imc-reference/0x00A0", metavar="NAME/ID",
                        help="the node's name and IMC id (default imc-reference/0x00A0)")
     serve.add_argument("--peer", action="append", default=[], metavar="NAME[:METRES]",
@@ -31,6 +31,13 @@ def add_command(sub, suite_loader) -> None:
     serve.add_argument("--break", dest="broken", choices=sorted(BREAKS), metavar="NAME",
                        help="break one rule: " + "; ".join(f"{k}: {v}" for k, v in BREAKS.items()))
     serve.set_defaults(func=lambda args: command_serve(args, suite_loader()))
+
+
+def port_number(text: str) -> int:
+    if not text.isdigit() or int(text) > 65535:
+        import argparse
+        raise argparse.ArgumentTypeError(f"{text!r}: a port is 0 to 65535")
+    return int(text)
 
 
 def probability(text: str) -> float:

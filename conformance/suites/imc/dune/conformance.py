@@ -1,0 +1,182 @@
+"""``make dune-conformance``: the whole IMC scenario set, with the robustness phase and every effect allowed, against
+DUNE as a live node, under the ``seed`` profile and under the ``dune`` profile.
+
+It runs inside a private network namespace it creates (``unshare -n``: loopback up, multicast routed to loopback,
+nothing outside reachable), because DUNE announces itself on a multicast group and its acoustic modem simulator
+talks over another. There it starts the Iridium gateway stand-in, DUNE's acoustic peer and DUNE as the vehicle,
+runs ``imc-conformance run --target`` once per profile (the vehicle restarted fresh in between; the robustness
+phase restarts it to bisect), captures the exchange on loopback, stops everything it started by PID and checks that
+no DUNE process is left. It writes ``reports/dune-<profile>.{json,html}`` and ``reports/dune-exchange.pcap``, then runs
+the expectations test (``tests/dune_expectations.py``: the verdict per message DUNE is known to get).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from .build import built, home
+from .world import (PEER, PEER_ID, UDP_PORT, VEHICLE, dune_argv, forget_state, iridium_gateway, leftovers, restart,
+                    start, stop, write_configs)
+
+INSIDE = "IMC_CONFORMANCE_DUNE_NAMESPACE"
+PROFILES = ("seed", "dune")
+CLAIMS = {"description": "What DUNE (lauv-simulator-1, as configured here) implements: no SmsTx (DUNE has only "
+                         "SmsRequest, for a GSM modem on a serial port).",
+          "services": ["acoustic", "lbl", "iridium", "historic-data", "discovery"]}
+CAPTURED_PORTS = {UDP_PORT, *range(30100, 30105)}
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="make dune-conformance", description=__doc__.splitlines()[0])
+    parser.add_argument("--reports", type=Path, default=Path("reports"), help="where to write the reports")
+    parser.add_argument("--no-robustness", action="store_true", help="the scenarios only (faster)")
+    parser.add_argument("--checkout", type=Path, default=Path.cwd(), help="the checkout holding tests/")
+    args = parser.parse_args(argv)
+    if not built():
+        print("make dune-conformance: DUNE is not built here: run `make dune` first", file=sys.stderr)
+        return 2
+    if os.environ.get(INSIDE) != "1":
+        return _in_namespace(argv)
+    return _run(args)
+
+
+def _in_namespace(argv: list[str]) -> int:
+    """Run this same command again inside a new network namespace."""
+    if shutil.which("unshare") is None or shutil.which("ip") is None:
+        print("make dune-conformance: needs unshare and ip (Debian: util-linux, iproute2)", file=sys.stderr)
+        return 2
+    probe = subprocess.run(["unshare", "--net", "true"], capture_output=True, text=True)
+    if probe.returncode != 0:
+        print(f"make dune-conformance: cannot create a network namespace ({probe.stderr.strip()}): unshare --net "
+              "needs root", file=sys.stderr)
+        return 2
+    command = ["unshare", "--net", "--", sys.executable, "-m", "imc_conformance.suites.imc.dune", "conformance", *argv]
+    return subprocess.run(command, env={**os.environ, INSIDE: "1"}).returncode
+
+
+def _run(args) -> int:
+    problem = _isolate()
+    if problem:
+        print(f"make dune-conformance: {problem}", file=sys.stderr)
+        return 2
+    run = home() / "run"
+    shutil.rmtree(run, ignore_errors=True)
+    run.mkdir(parents=True)
+    args.reports.mkdir(parents=True, exist_ok=True)
+    write_configs()
+    for system in (VEHICLE, PEER):
+        forget_state(system)
+    (run / "claims.json").write_text(json.dumps(CLAIMS))
+    began = time.monotonic()
+    gateway = iridium_gateway()
+    capture = _capture()
+    start(run, "peer", dune_argv("peer"))
+    start(run, "vehicle", dune_argv("vehicle"))
+    codes = {}
+    try:
+        for i, profile in enumerate(PROFILES):
+            if i:
+                restart(run, "vehicle", VEHICLE)
+            codes[profile] = _suite(args, run, profile)
+    except KeyboardInterrupt:
+        print("make dune-conformance: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        for name in ("vehicle", "peer"):
+            stop(run, name)
+        gateway.shutdown()
+        _save_capture(capture, args.reports / "dune-exchange.pcap")
+        left = leftovers()
+        for pid in left:
+            os.kill(pid, signal.SIGKILL)
+        print(f"stopped: the vehicle, its peer and the gateway; {'no DUNE process left' if not left else f'killed {len(left)} left over'}")
+    wall = time.monotonic() - began
+    print(f"wall time: {wall:.0f} s; exit codes: " + ", ".join(f"{p} {c}" for p, c in codes.items()))
+    (args.reports / "dune-run.json").write_text(json.dumps({"wall_seconds": round(wall), "exit_codes": codes}) + "\n")
+    if any(code not in (0, 1) for code in codes.values()):
+        return 2  # a run that could not judge DUNE (usage, adapter, nothing tested)
+    return _expectations(args)
+
+
+def _isolate() -> str | None:
+    """Bring loopback up and route multicast to it; why the namespace is not private, or None."""
+    lines = Path("/proc/net/dev").read_text().splitlines()[2:]  # this namespace's interfaces (sysfs shows the host's)
+    interfaces = sorted(line.split(":", 1)[0].strip() for line in lines)
+    if interfaces != ["lo"]:
+        return f"not in a private network namespace (interfaces: {', '.join(interfaces)})"
+    for command in (["ip", "link", "set", "lo", "up"], ["ip", "link", "set", "lo", "multicast", "on"],
+                    ["ip", "route", "add", "224.0.0.0/4", "dev", "lo"]):
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            return f"{' '.join(command)}: {done.stderr.strip()}"
+    return None
+
+
+def _suite(args, run: Path, profile: str) -> int:
+    """One run of the scenario set against the vehicle, under ``profile``; its exit code."""
+    from ....cli import main as cli
+
+    restart_cmd = f"{sys.executable} -m imc_conformance.suites.imc.dune restart --run {run}"
+    argv = ["run", "--no-progress", "--target", f"udp://127.0.0.1:{UDP_PORT}", "--startup", "40",
+            "--allow-effects", "--claims", str(run / "claims.json"), "--profile", profile,
+            "--param", f"peer={PEER}", "--param", f"beacon={PEER}", "--param", "sms_number=+351000000000",
+            "--param", f"remote_system={PEER_ID:#06x}",
+            "--json", str(args.reports / f"dune-{profile}.json"), "--html", str(args.reports / f"dune-{profile}.html")]
+    if not args.no_robustness:
+        argv += ["--robustness", "--restart-cmd", restart_cmd]
+    print(f"== {profile} profile: imc-conformance {' '.join(argv)}", flush=True)
+    return cli(argv)
+
+
+def _capture():
+    """A sniffer of the IMC datagrams on loopback (scapy), or None when it cannot run."""
+    try:
+        from scapy.all import UDP, AsyncSniffer
+    except ImportError:
+        print("no capture: scapy is not installed")
+        return None
+
+    def ours(packet) -> bool:
+        return UDP in packet and ({packet[UDP].sport, packet[UDP].dport} & CAPTURED_PORTS)
+    sniffer = AsyncSniffer(iface="lo", lfilter=ours, store=True)
+    sniffer.start()
+    return sniffer
+
+
+def _save_capture(sniffer, path: Path) -> None:
+    if sniffer is None:
+        return
+    from scapy.all import wrpcap
+
+    packets = sniffer.stop()
+    wrpcap(str(path), packets)
+    print(f"capture: {len(packets)} datagrams in {path}")
+
+
+def _expectations(args) -> int:
+    """The expectations test over the reports just written."""
+    test = args.checkout / "tests" / "dune_expectations.py"
+    if not test.exists():
+        print(f"no expectations test at {test} (run from the checkout)")
+        return 0
+    env = {**os.environ, "IMC_CONFORMANCE_DUNE_REPORTS": str(args.reports.resolve())}
+    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(test)],
+                          cwd=args.checkout, env=env).returncode
+
+
+def restart_vehicle(argv: list[str]) -> int:
+    """``--restart-cmd`` of the robustness phase: restart the vehicle (its state forgotten)."""
+    parser = argparse.ArgumentParser(prog="python -m imc_conformance.suites.imc.dune restart")
+    parser.add_argument("--run", type=Path, required=True)
+    args = parser.parse_args(argv)
+    restart(args.run, "vehicle", VEHICLE)
+    return 0
+
