@@ -1,6 +1,6 @@
 """How the session behaves on an IMC link, sans-IO: a well-mannered peer, because real nodes ignore
 unannounced sources (imc-wire.md, "IMC over UDP"). It announces its ``imc+udp://IP:PORT/`` service to the
-target and to the target host's discovery ports 30100-30104, heart-beats to the target at 1 Hz, learns the
+target and to the target host's discovery ports 30100-30104 every 10 s, heart-beats to the target at 1 Hz, learns the
 node's id from its first valid frame (unless given), and says the target is ready once a valid frame from
 it arrived (at once when its id is given: the seeds do not make Heartbeat periodic, erratum E7).
 
@@ -38,9 +38,7 @@ class ImcPeer:
         """Introduce the session (again, after the target restarted): it is ready once the target shows itself."""
         self.ready = self.given
         self.next_beat, self.next_announce = t + HEARTBEAT_EVERY, t + ANNOUNCE_EVERY
-        announce = self._announce(t)
-        return ([(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]
-                + [(None, self._heartbeat(t))])
+        return self._announcements(t) + [(None, self._heartbeat(t))]
 
     def due(self, t: float) -> list[tuple[object, bytes]]:
         out = []
@@ -49,8 +47,14 @@ class ImcPeer:
             out.append((None, self._heartbeat(t)))
         if self.next_announce is not None and t >= self.next_announce:
             self.next_announce = t + ANNOUNCE_EVERY
-            out.append((None, self._announce(t)))
+            out += self._announcements(t)
         return out
+
+    def _announcements(self, t: float) -> list[tuple[object, bytes]]:
+        """The Announce, to the target and to its host's discovery ports (a node that was still starting when the
+        last one came, or forgot it, learns of the session from the next: DUNE takes Announces only there)."""
+        announce = self._announce(t)
+        return [(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]
 
     def accepts(self, parsed) -> bool:
         """Whether a frame is for the session (malformed frames are, so the byte-level checks see them)."""

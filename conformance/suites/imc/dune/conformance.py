@@ -59,14 +59,30 @@ def _in_namespace(argv: list[str]) -> int:
               "needs root", file=sys.stderr)
         return 2
     command = ["unshare", "--net", "--", sys.executable, "-m", "imc_conformance.suites.imc.dune", "conformance", *argv]
-    return subprocess.run(command, env={**os.environ, INSIDE: "1"}).returncode
+    inner = subprocess.Popen(command, env={**os.environ, INSIDE: "1"})  # unshare execs it: this is its process
+    signal.signal(signal.SIGTERM, lambda signum, frame: inner.send_signal(signal.SIGTERM))
+    while True:
+        try:
+            return inner.wait()
+        except KeyboardInterrupt:  # Ctrl-C reached it too (same process group): let it write and stop
+            continue
+
+
+def _interrupted(signum, frame):
+    raise KeyboardInterrupt  # so that a SIGTERM (make, a timeout) writes what was judged and stops what was started
 
 
 def _run(args) -> int:
+    signal.signal(signal.SIGTERM, _interrupted)
     problem = _isolate()
     if problem:
         print(f"make dune-conformance: {problem}", file=sys.stderr)
         return 2
+    stale = leftovers()
+    for pid in stale:
+        os.kill(pid, signal.SIGKILL)
+    if stale:
+        print(f"killed {len(stale)} DUNE processes left over by an earlier run")
     run = home() / "run"
     shutil.rmtree(run, ignore_errors=True)
     run.mkdir(parents=True)
@@ -130,8 +146,8 @@ def _suite(args, run: Path, profile: str) -> int:
             "--param", f"peer={PEER}", "--param", f"beacon={PEER}", "--param", "sms_number=+351000000000",
             "--param", f"remote_system={PEER_ID:#06x}",
             "--json", str(args.reports / f"dune-{profile}.json"), "--html", str(args.reports / f"dune-{profile}.html")]
-    if not args.no_robustness:
-        argv += ["--robustness", "--restart-cmd", restart_cmd]
+    if not args.no_robustness:  # a simulated vehicle: the corpus's own destinations are harmless here
+        argv += ["--robustness", "--replay-effects", "--restart-cmd", restart_cmd]
     print(f"== {profile} profile: imc-conformance {' '.join(argv)}", flush=True)
     return cli(argv)
 
