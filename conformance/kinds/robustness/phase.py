@@ -13,7 +13,7 @@ target) so the sequence reads top to bottom; the driver below turns events into 
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..scenario.exchanges import exchange_for
 from ..scenario.matchers import hashable, same
@@ -94,9 +94,9 @@ class ProbeProgram:
 class Probe:
     program: ProbeProgram
     baseline: bool = False
-    silenced: str | None = None  # after what it stopped answering ("block 3 of 37 (frames ...)", "the garbage")
-    block: int | None = None
-    bisected: str | None = None
+    down: bool = False  # silenced, and not served again since (no restart)
+    silencings: list = field(default_factory=list)  # after what it stopped answering, and what bisecting found
+    garbage: str | None = None  # what the garbage did to it
     error: str | None = None  # why its request cannot be sent
 
 
@@ -205,6 +205,7 @@ class PhaseMachine:
         for probe in self.probes:
             probe.baseline = probe not in unanswered
         blocks = [phase.frames[i:i + settings["block"]] for i in range(0, len(phase.frames), settings["block"])]
+        restarted = False
         for k, block in enumerate(blocks, 1):
             if not self._listening():
                 why = "every probe is silenced" if any(p.baseline for p in self.probes) else "no probe was answered before"
@@ -212,8 +213,20 @@ class PhaseMachine:
                 break
             yield from self._replay(block)
             self._log("block", f"block {k} of {len(blocks)} sent: {_span(block)}")
-            for probe in (yield from self._round(self._listening(), f"after block {k}")):
-                probe.silenced, probe.block = f"block {k} of {len(blocks)} ({_span(block)})", k - 1
+            silenced = yield from self._round(self._listening(), f"after block {k}")
+            for probe in silenced:
+                probe.down = True
+                probe.silencings.append(f"block {k} of {len(blocks)} ({_span(block)})")
+            if silenced and self.phase.can_restart:  # find the frame, bring the node back, and go on
+                found = yield from self._bisect(block, silenced)
+                for probe in silenced:
+                    probe.silencings[-1] += f"; {found}"
+                restarted = True
+                if not (yield from self._revive(silenced)):
+                    break
+            elif silenced:
+                for probe in silenced:
+                    probe.silencings[-1] += "; give --restart-cmd to bisect to the frame"
         if self._listening():
             rng = random.Random(settings["seed"])
             source = (self.addressing.system, FLOOD_ENTITY)
@@ -223,16 +236,25 @@ class PhaseMachine:
             yield _Wait(self.now + self._scaled(settings["settle"]))
             self._log("garbage", f"{settings['garbage']} garbage datagrams sent (seed {settings['seed']})")
             for probe in (yield from self._round(self._listening(), "after the garbage")):
-                probe.silenced = f"the {settings['garbage']} garbage datagrams"
-        silenced = sorted({p.block for p in self.probes if p.block is not None})
-        if silenced and self.phase.can_restart:
-            for k in silenced:
-                yield from self._bisect(blocks[k], [p for p in self.probes if p.block == k])
+                probe.down, probe.garbage = True, f"the {settings['garbage']} garbage datagrams"
+        if self.phase.can_restart and (restarted or any(p.down for p in self.probes)):
             problem = yield _Restart()  # leave the target as it was found
             self._log("restart", "restarted to leave the target running" if problem is None else problem)
 
+    def _revive(self, probes: list[Probe]):
+        """Restart the node after a bisection; whether the probes are served again (else the phase stops)."""
+        problem = yield _Restart()
+        if problem is None and (yield from self._round(probes, "after a restart, before going on")):
+            problem = "after a restart the node did not serve the probe again"
+        if problem is not None:
+            self._log("restart", f"the phase stops: {problem}")
+            return False
+        for probe in probes:
+            probe.down = False
+        return True
+
     def _listening(self) -> list[Probe]:
-        return [p for p in self.probes if p.baseline and p.silenced is None]
+        return [p for p in self.probes if p.baseline and not p.down and not p.error]
 
     def _replay(self, frames: list[Frame]):
         pace, source = self._scaled(self.phase.settings["pace"]), (self.addressing.system, FLOOD_ENTITY)
@@ -243,17 +265,16 @@ class PhaseMachine:
         yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
 
     def _bisect(self, block: list[Frame], probes: list[Probe]):
-        """Restart, replay half of the block, probe; keep the half that silences a probe, down to one frame."""
+        """Restart, replay half of the block, probe; keep the half that silences a probe, down to one frame; what
+        it found."""
         candidates = block
         while True:
             problem = yield _Restart()
             if problem is None and (yield from self._round(probes, "after a restart, before bisecting further")):
                 problem = "after a restart the node did not serve the probe again"
             if problem is not None:
-                for probe in probes:
-                    probe.bisected = f"not bisected: {problem}"
                 self._log("restart", f"cannot bisect: {problem}")
-                return
+                return f"not bisected: {problem}"
             half = candidates[:max(1, len(candidates) // 2)] if len(candidates) > 1 else candidates
             yield from self._replay(half)
             silent = bool((yield from self._round(probes, f"bisecting: after {_span(half)}")))
@@ -261,10 +282,8 @@ class PhaseMachine:
                 what = (f"bisected: the frame {_name(half[0])} alone silences it" if silent else
                         f"bisected: no single frame does it alone, the block as a whole does (last candidate "
                         f"{_name(half[0])})")
-                for probe in probes:
-                    probe.bisected = what
                 self._log("bisect", what)
-                return
+                return what
             candidates = half if silent else candidates[len(half):]
 
     # ------------------------------------------------------------------ probing
@@ -348,20 +367,19 @@ class PhaseMachine:
                          "detail": f"no {what} before the robustness phase either: its scenarios judge that; whether "
                                    "the target survives the corpus cannot be told from this probe"}]
         else:
-            corpus = probe.block is None
-            garbage_ok = probe.silenced is None
             findings = [{"check": "probe:baseline", "passed": True, "level": level, "clause": clause,
                          "detail": f"{what} received before the robustness phase"}]
             skipped = f" ({'; '.join(self.phase.skipped)} left out)" if self.phase.skipped else ""
             blocks = -(-len(self.phase.frames) // self.phase.settings["block"])
-            detail = (f"{what} still received after each of the {blocks} blocks ({len(self.phase.frames)} corpus frames)"
-                      f"{skipped}" if corpus else f"no {what} after {probe.silenced}"
-                      + (f"; {probe.bisected}" if probe.bisected else "; give --restart-cmd to bisect to the frame"))
-            findings.append({"check": "probe:corpus", "passed": corpus, "level": level, "clause": clause, "detail": detail})
-            if corpus:
-                findings.append({"check": "probe:garbage", "passed": garbage_ok, "level": level, "clause": clause,
-                                 "detail": f"{what} still received after the garbage burst" if garbage_ok
-                                 else f"no {what} after {probe.silenced}"})
+            detail = (f"no {what} after " + "; and after ".join(probe.silencings) if probe.silencings else
+                      f"{what} still received after each of the {blocks} blocks ({len(self.phase.frames)} corpus frames)"
+                      f"{skipped}")
+            findings.append({"check": "probe:corpus", "passed": not probe.silencings, "level": level, "clause": clause,
+                             "detail": detail})
+            if not probe.down or probe.garbage:
+                findings.append({"check": "probe:garbage", "passed": probe.garbage is None, "level": level,
+                                 "clause": clause, "detail": f"no {what} after {probe.garbage}" if probe.garbage
+                                 else f"{what} still received after the garbage burst"})
         timeline = [e for e in self.timeline if e.get("probe") in (None, member)]
         return {"findings": findings, "timeline": [{k: v for k, v in e.items() if k != "probe"} for e in timeline],
                 "frames": self.frames_seen if member == 0 else [], "error": probe.error}

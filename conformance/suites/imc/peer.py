@@ -64,12 +64,13 @@ class ImcPeer:
         return header["src"] != self.system and header["dst"] in (self.system, 0xFFFF, 0)
 
     def observe(self, t: float, parsed, from_target: bool) -> None:
-        """Learn the node's id from its first valid frame from the target's own address (not from whatever else
-        runs on its host: its discovery traffic, other IMC programs)."""
-        if parsed.decoded is None:
+        """Learn the node's id, and that it is ready, from its valid frames from the target's own address: not
+        from whatever else runs on its host (its discovery traffic: a restarting DUNE announces itself before it
+        takes the session's Announce, so its requests would still be dropped)."""
+        if parsed.decoded is None or not from_target:
             return
         src = parsed.decoded["header"]["src"]
-        if self.node is None and src != self.system and from_target:
+        if self.node is None and src != self.system:
             self.node = src
         if src == self.node:
             self.ready = True

@@ -1,0 +1,84 @@
+"""What DUNE gets, per message and profile, and the defects the suite must go on catching: run by
+``make dune-conformance`` over the reports it just wrote (not by CI, which does not build DUNE; the name keeps
+pytest's collection of tests/ from picking it up). A change to the scenarios that stops catching a DUNE defect, or
+starts failing something DUNE does right, fails here.
+
+DUNE as shipped in the imcpy 1.1.2 sdist, configured by ``conformance/suites/imc/dune/world.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+REPORTS = Path(os.environ.get("IMC_CONFORMANCE_DUNE_REPORTS", "reports"))
+pytestmark = pytest.mark.skipif(not (REPORTS / "dune-seed.json").exists(),
+                                reason="run by make dune-conformance, over the reports it writes")
+
+# Per profile: the verdict of each message, and the cases whose verdict is a known DUNE behaviour.
+MESSAGES = {
+    "seed": {"Heartbeat": "FAIL", "Announce": "PASS", "SmsTx": "PASS", "IridiumMsgTx": "FAIL", "IridiumTxStatus": "PASS",
+             "HistoricDataQuery": "FAIL", "RemoteCommand": "PASS", "LblConfig": "FAIL", "AcousticOperation": "FAIL",
+             "AcousticSystemsQuery": "FAIL", "AcousticSystems": "PASS", "AcousticRequest": "FAIL"},
+    "dune": {"Heartbeat": "FAIL", "Announce": "PASS", "SmsTx": "PASS", "IridiumMsgTx": "FAIL", "IridiumTxStatus": "PASS",
+             "HistoricDataQuery": "FAIL", "RemoteCommand": "PASS", "LblConfig": "FAIL", "AcousticOperation": "FAIL",
+             "AcousticSystemsQuery": "FAIL", "AcousticSystems": "PASS", "AcousticRequest": "INCONCLUSIVE"},
+}
+DEFECTS = {  # case -> (verdict under both profiles, words its detail must hold)
+    "imc/AcousticOperation/scenario/reverse-range": ("FAIL", "no AcousticOperation"),  # UAN/Task.cpp:303-315
+    "imc/AcousticOperation/scenario/msg-short": ("FAIL", "no AcousticOperation"),  # CommManager/Task.cpp:786-791
+    "imc/AcousticOperation/scenario/msg-without-message": ("FAIL", "no AcousticOperation"),  # CommManager/Task.cpp:765-767
+    "imc/AcousticOperation/scenario/unsupported-op": ("NON_STRICT", "no AcousticOperation"),
+    "imc/HistoricDataQuery/scenario/sample-priority": ("NON_STRICT", "holds no"),  # DataStore.hpp:121-146
+    "imc/Heartbeat/robustness/still-served": ("FAIL", "imc/HistoricData/"),  # DataStore.hpp:139-143: a wrong-typed sample
+}
+PASSES = ("imc/AcousticOperation/scenario/range", "imc/AcousticOperation/scenario/msg", "imc/AcousticOperation/scenario/abort",
+          "imc/AcousticOperation/scenario/unknown-system", "imc/AcousticSystemsQuery/scenario/lists-peer",
+          "imc/LblConfig/scenario/set-then-get", "imc/HistoricDataQuery/scenario/max-size",
+          "imc/RemoteCommand/scenario/executed", "imc/IridiumMsgTx/scenario/status", "imc/Announce/scenario/well-formed",
+          "imc/Heartbeat/scenario/periodic")
+
+
+def result(profile: str) -> dict:
+    return json.loads((REPORTS / f"dune-{profile}.json").read_text(encoding="utf-8"))
+
+
+def cases(profile: str) -> dict[str, dict]:
+    return {c["id"]: c for m in result(profile)["messages"] for c in m["cases"]}
+
+
+@pytest.mark.parametrize("profile", sorted(MESSAGES))
+def test_each_message_gets_its_known_verdict(profile):
+    doc = result(profile)
+    assert doc["complete"] and doc["notes"][0] == f"profile: {profile}"
+    assert {m["name"]: m["verdict"] for m in doc["messages"]} == MESSAGES[profile]
+
+
+@pytest.mark.parametrize("profile", sorted(MESSAGES))
+def test_the_known_dune_defects_are_still_caught(profile):
+    found = cases(profile)
+    for case_id, (verdict, words) in DEFECTS.items():
+        assert found[case_id]["verdict"] == verdict and words in found[case_id]["detail"], case_id
+
+
+@pytest.mark.parametrize("profile", sorted(MESSAGES))
+def test_what_dune_does_right_passes(profile):
+    found = cases(profile)
+    assert {c: found[c]["verdict"] for c in PASSES} == {c: "PASS" for c in PASSES}
+
+
+def test_the_dune_profile_excuses_only_what_it_cites():
+    seed, dune = cases("seed"), cases("dune")
+    changed = {c for c in seed if c in dune and seed[c]["verdict"] != dune[c]["verdict"]}
+    assert changed and all(c.startswith(("imc/AcousticRequest/", "imc/RemoteCommand/scenario/forwarded")) for c in changed)
+    assert all(dune[c]["verdict"] == "INCONCLUSIVE" for c in changed)
+
+
+def test_the_run_left_no_process_behind():
+    from imc_conformance.suites.imc.dune.world import leftovers
+
+    assert leftovers() == []
+    assert json.loads((REPORTS / "dune-run.json").read_text())["exit_codes"] == {"seed": 1, "dune": 1}
