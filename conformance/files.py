@@ -143,6 +143,7 @@ def read_result(path: Path) -> RunResult:
     problem = schema_error(VECTORS / "schema" / SCHEMAS[version], doc, "")
     if problem:
         raise ValueError(problem)
-    if version == 1:  # format 1 knew only IMC: numeric message ids, no title, completeness, incidents or check kinds
+    if version < 3:  # formats 1 and 2 knew only IMC: numeric message ids, no title (nor, in 1, completeness,
+        # incidents or check kinds)
         doc = dict(doc, title="IMC", messages=[dict(m, key=str(m["id"])) for m in doc["messages"]])
     return RunResult.from_dict(doc)

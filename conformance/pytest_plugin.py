@@ -18,7 +18,7 @@ from .core.verdicts import Verdict, failing
 def pytest_addoption(parser):
     group = parser.getgroup("imc-conformance")
     group.addoption("--conformance-adapter", metavar="SPEC", help="run a suite's corpus against this library adapter")
-    group.addoption("--conformance-suite", default="imc", help="the suite: imc (default) or ros_acomms")
+    group.addoption("--conformance-suite", help="the suite (default: the command line's default suite)")
     group.addoption("--conformance-edition", help="the edition (default: the suite's first)")
     group.addoption("--conformance-message", action="append", default=[], metavar="NAME", help="only this message/type")
     group.addoption("--conformance-id", action="append", default=[], metavar="GLOB", help="only case ids matching")
@@ -81,9 +81,10 @@ def pytest_collection_modifyitems(session, config, items):
         return
     from .cli import UsageError, load_library_adapter
     from .files import CorpusError, open_corpus
+    from .suites import names
 
     try:
-        suite, everything = open_corpus(config.getoption("conformance_suite"))
+        suite, everything = open_corpus(config.getoption("conformance_suite") or names()[0])
         adapter = load_library_adapter(spec, suite)
     except (UsageError, CorpusError) as exc:
         raise pytest.UsageError(str(exc)) from exc

@@ -88,7 +88,7 @@ def misbehave(request: dict, reply: dict) -> str | None:
         if STATE is not None:
             (STATE / "hanging").touch()
         time.sleep(3600)
-    if MODE in ("crash", "always-crashes"):
+    if MODE in ("crash", "always-crashes", "crash-leaves-child"):
         sys.stderr.write("hostile: dying on the trigger frame\n")
         sys.stderr.flush()
         os._exit(3)
@@ -107,6 +107,8 @@ def misbehave(request: dict, reply: dict) -> str | None:
         return json.dumps({"id": ident, "ok": True})
     elif MODE == "internal":
         return json.dumps({"id": ident, "ok": False, "internal": True, "error": "KeyError: 'range'"})
+    elif MODE == "hostile-internal":
+        return json.dumps({"id": ident, "ok": False, "internal": True, "error": "KeyError " + EVIL})
     elif MODE == "unknown-message":
         reply["message"]["abbrev"] = "NoSuchMessage"
     elif MODE == "extra-field":
@@ -156,8 +158,27 @@ def serve_reversed() -> None:
         pending += [json.loads(line) for line in lines]
 
 
+def leave_a_locked_child() -> None:
+    """First start: a child holding a lock on ``$HOSTILE_STATE/held`` and sleeping; the lock frees only when it
+    dies. Later starts (after the crash): wait for that lock, which is free at once if the runner killed the first
+    start's process group before restarting, and never (the run hangs on the hello) if it did not."""
+    import fcntl
+
+    held = os.open(STATE / "held", os.O_RDWR | os.O_CREAT)
+    if first_time("locked-child"):
+        fcntl.flock(held, fcntl.LOCK_EX)
+        if os.fork() == 0:  # shares the locked open file; the parent's exit leaves the lock held
+            note_pid(os.getpid())
+            time.sleep(600)
+            os._exit(0)
+    else:
+        fcntl.flock(held, fcntl.LOCK_EX)
+
+
 def main() -> None:
     note_pid(os.getpid())
+    if MODE == "crash-leaves-child":
+        leave_a_locked_child()
     if MODE == "exit-at-once":
         sys.exit("hostile: no IMC here")
     if MODE == "bad-hello":

@@ -19,9 +19,9 @@ def scenario_cases(cases, ids=None, kinds=("scenario",)):
     return [c for c in cases if c.kind in kinds and (ids is None or c.id in ids)]
 
 
-def virtual_session(suite, edition: str, node=None, restartable: bool = False, **node_options):
+def virtual_session(suite, edition: str, node=None, restartable: bool = False, restarted=None, **node_options):
     """A session with a node on virtual time; ``restartable``: the session may restart it (a fresh node made
-    with the same options), as --restart-cmd lets it restart a real one."""
+    with the same options, passed through ``restarted`` if given), as --restart-cmd lets it restart a real one."""
     def fresh():
         return ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=NODE, **node_options)
 
@@ -32,7 +32,7 @@ def virtual_session(suite, edition: str, node=None, restartable: bool = False, *
              "kinds": list(LIVE_KINDS)}
 
     def restart():
-        link.node = fresh()
+        link.node = fresh() if restarted is None else restarted(fresh(), link.now())
         link.restarts += 1
         return None
 
@@ -41,11 +41,11 @@ def virtual_session(suite, edition: str, node=None, restartable: bool = False, *
 
 
 def run_virtual(suite, cases, edition=None, options=None, strict=False, kinds=("scenario",), restartable=False,
-                **node_options):
+                restarted=None, **node_options):
     """The result of the live cases of ``kinds`` among ``cases`` against a node made with ``node_options``, and
     its link. The robustness phase replays the vector cases among ``cases``."""
     edition = edition or suite.editions[0]
-    session, link = virtual_session(suite, edition, restartable=restartable, **node_options)
+    session, link = virtual_session(suite, edition, restartable=restartable, restarted=restarted, **node_options)
     options = dict(EVERYTHING if options is None else options)
     options.setdefault("corpus", tuple(c for c in cases if c.kind == "vector"))
     options.setdefault("robustness", "robustness" in kinds)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from harness import alive
 from imc_conformance.cli import main
 from imc_conformance.suites.imc.paths import imc_data
 
@@ -60,14 +61,6 @@ def verdicts(doc: dict) -> dict[str, str]:
 
 def case(doc: dict, case_id: str) -> dict:
     return next(c for m in doc["messages"] for c in m["cases"] if c["id"] == case_id)
-
-
-def alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (FileNotFoundError, ProcessLookupError):
-        return False
-    return state != "Z"
 
 
 def survivors(tmp_path: Path) -> list[int]:
@@ -133,11 +126,15 @@ def test_the_out_of_type_enum_value_of_the_seeds_stays_loadable(capsys):
 
 # ---------------------------------------------------------------- 3. no terminal escape reaches the terminal
 
-def test_implementation_text_cannot_drive_the_terminal(hostile, capsys):
-    code, doc, _ = hostile("hostile-text")
+@pytest.mark.parametrize("mode, code, words", [
+    ("hostile-text", 1, ("hostile", "refused")),  # the hello's name, a refusal, stderr
+    ("hostile-internal", 2, ("KeyError",)),  # an internal error's text
+])
+def test_implementation_text_cannot_drive_the_terminal(hostile, capsys, mode, code, words):
+    got, doc, _ = hostile(mode)
     out, err = capsys.readouterr()
-    assert code == 1 and doc["messages"][0]["cases"]
-    assert "hostile" in out and "refused" in out
+    assert got == code and doc["messages"][0]["cases"]
+    assert all(word in out for word in words)
     assert not [c for c in CONTROL if c in out + err], repr(out[:500])
     assert "FORGED" not in "".join(line for line in out.splitlines() if line.startswith("FORGED"))
     assert "\\x1b" in out  # shown, not obeyed
@@ -201,13 +198,14 @@ def test_the_adapter_contract_documents_every_answer_form():
     assert 'Use `"nan"`, `"inf"`, `"-inf"` for non-finite values' not in text
 
 
-def test_a_nan_answered_as_a_word_fails_only_where_the_bits_are_pinned(hostile, capsys):
+def test_a_nan_answered_as_a_word_fails_only_where_the_bits_are_pinned(hostile, capsys, tmp_path):
     code, doc, _ = hostile("nan-word", selection=("--id", "imc/LblRange/boundary/range/*nan*"))
     got = verdicts(doc)
     assert got["imc/LblRange/boundary/range/nan"] == "PASS"
     pinned = {cid for cid in got if cid.endswith(("nan-payload", "negative-nan"))}
     assert pinned and {got[cid] for cid in pinned} == {"FAIL"} and code == 1
     assert 'answer "nan:<hex>"' in case(doc, "imc/LblRange/boundary/range/nan-payload")["detail"]
+    assert survivors(tmp_path) == []
 
 
 # ---------------------------------------------------------------- 7. a protocol violation is never forgiven
@@ -281,12 +279,14 @@ def test_library_adapters_given_as_classes(tmp_path, capsys, attr, code, fragmen
 
 # ---------------------------------------------------------------- 10. reports that cannot be written
 
-def test_a_report_that_cannot_be_written_is_an_error_but_the_others_are_written(tmp_path, capsys):
+@pytest.mark.parametrize("where", ["under-a-file", "proc"])
+def test_a_report_that_cannot_be_written_is_an_error_but_the_others_are_written(tmp_path, capsys, where):
     blocker = tmp_path / "a-file"
     blocker.write_text("")
+    bad = blocker / "r.json" if where == "under-a-file" else Path("/proc/imc-conformance-report.json")
     good = tmp_path / "r.md"
     code = main(["run", "--adapter", "imcpy", "--no-progress", "--id", "imc/LblRange/minimal",
-                 "--json", str(blocker / "r.json"), "--markdown", str(good)])
+                 "--json", str(bad), "--markdown", str(good)])
     assert code == 2 and good.exists()
     err = capsys.readouterr().err
     assert "Traceback" not in err and "cannot write the json report" in err
@@ -325,11 +325,12 @@ def test_an_adapter_for_another_suite_is_refused(hostile, capsys):
     ("extra-field", TRIGGER, "bogus"),
     ("bad-float", TRIGGER, "'banana'"),
 ])
-def test_malformed_answers_are_adapter_errors(hostile, capsys, mode, case_id, fragment):
+def test_malformed_answers_are_adapter_errors(hostile, capsys, tmp_path, mode, case_id, fragment):
     code, doc, _ = hostile(mode)
     got = case(doc, case_id)
     assert code == 2 and got["verdict"] == "ADAPTER_ERROR", got
     assert fragment in got["detail"] and "<object object" not in got["detail"]
+    assert survivors(tmp_path) == []
 
 
 # ---------------------------------------------------------------- 13. reading a saved result
@@ -426,12 +427,14 @@ PROBE = [  # mode, the trigger case's verdict (None: the run never starts), exit
     ("hang", "TIMEOUT", 1),
     ("crash", "CRASH", 1),
     ("fork-exit", "CRASH", 1),
+    ("crash-leaves-child", "CRASH", 1),  # its child must die at the restart, not at the end of the run
     ("liar", "FAIL", 1),
     ("hostile-text", "FAIL", 1),
     ("garbage", "ADAPTER_ERROR", 2),
     ("unknown-id", "ADAPTER_ERROR", 2),
     ("malformed", "ADAPTER_ERROR", 2),
     ("internal", "ADAPTER_ERROR", 2),
+    ("hostile-internal", "ADAPTER_ERROR", 2),
     ("partial-line", "ADAPTER_ERROR", 2),
     ("huge-line", "ADAPTER_ERROR", 2),
     ("unknown-message", "ADAPTER_ERROR", 2),

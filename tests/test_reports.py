@@ -128,6 +128,28 @@ def test_json_validates_and_round_trips(which, request):
     assert render_json(RunResult.from_dict(doc)) == text
 
 
+def _older(doc: dict, version: int) -> dict:
+    """``doc`` as formats 1 and 2 wrote it: IMC only, numeric message ids, no title (format 1: no completeness,
+    incidents or check kinds)."""
+    old = {k: v for k, v in doc.items() if k != "title"}
+    old["format"] = f"imc-conformance-result/{version}"
+    old["messages"] = [{**{k: v for k, v in m.items() if k != "key"}, "id": int(m["key"])} for m in doc["messages"]]
+    if version == 1:
+        for key in ("complete", "incidents", "untested"):
+            old.pop(key)
+    return old
+
+
+@pytest.mark.parametrize("version", [1, 2])
+def test_report_reads_the_older_formats(version, imcpy_result, tmp_path):
+    from imc_conformance.files import read_result
+
+    path = tmp_path / f"r{version}.json"
+    path.write_text(json.dumps(_older(imcpy_result.to_dict(), version)), encoding="utf-8")
+    again = read_result(path)
+    assert render_json(again) == render_json(imcpy_result)
+
+
 def test_schema_rejects_broken_documents(broken_result):
     validator = Draft202012Validator(SCHEMA)
     good = json.loads(render_json(broken_result))

@@ -78,6 +78,39 @@ def test_a_node_silenced_by_one_valid_frame_is_named_and_bisected(suite, cases):
     assert any(e["event"] == "bisect" for e in found[ACOUSTIC[0]].timeline)
 
 
+class SlowAcousticStart:
+    """A node whose acoustic service comes up ``warmup`` seconds after a restart (DUNE's does: its acoustic tasks
+    and modem start after its UDP transport); until then acoustic requests go unanswered."""
+
+    def __init__(self, node, born: float, wire, warmup: float = 15.0):
+        self.node, self.ready, self.wire = node, born + warmup, wire
+
+    @property
+    def deadline(self):
+        return self.node.deadline
+
+    def due(self, t):
+        return self.node.due(t)
+
+    def receive(self, t, data, source):
+        decoded = self.wire.parse(data).decoded
+        if t < self.ready and decoded and decoded["abbrev"] in ("AcousticOperation", "AcousticRequest"):
+            return
+        self.node.receive(t, data, source)
+
+
+def test_a_node_slow_to_serve_after_a_restart_is_still_bisected(suite, cases):
+    """The restarted node is asked again until the robustness settings' revive bound, not just a probe's tries."""
+    assert suite.behaviour["robustness"]["revive"] > 15.0 > 2 * 5  # longer than two tries of the acoustic probes
+    result, link = run_virtual(suite, cases, kinds=ROBUSTNESS, restartable=True, broken="dies-after-raw",
+                               restarted=lambda node, t: SlowAcousticStart(node, t, suite.wire))
+    case = by_id(result)[ACOUSTIC[1]]
+    assert case.verdict is Verdict.FAIL and case.detail.count("bisected: the frame imc/AcousticRequest/") == 2
+    assert "did not serve the probe again" not in case.detail
+    assert any("after a restart, before bisecting further: AcousticOperation received (try 4)" in e.get("note", "")
+               for e in case.timeline)
+
+
 def test_without_a_restart_command_the_block_is_named(suite, cases):
     result, link = run_virtual(suite, cases, kinds=ROBUSTNESS, broken="dies-after-raw")
     case = by_id(result)[ACOUSTIC[0]]

@@ -105,3 +105,20 @@ def test_an_answer_of_an_unknown_or_other_type_is_the_adapters_fault_and_the_run
     verdict, detail = decoded("ros_acomms/CST/minimal")
     assert verdict == "ADAPTER_ERROR" and "asked for ros_acomms_msgs/CST, answered ros_acomms_msgs/XST" in detail
     assert {v.value for cid, (v, _) in found.items() if "/QueueEnable/" in cid} <= {"PASS", "IMPL_DEFINED"}
+
+
+class WithoutDescribe:
+    """The reference's encode and decode, without a describe operation."""
+
+    def __init__(self):
+        self.inner = __import__("ros_mutants").Reference()
+        self.hello, self.encode, self.decode = self.inner.hello, self.inner.encode, self.inner.decode
+
+
+def test_an_adapter_without_describe_leaves_the_definition_check_unsupported(ros):
+    from harness import verdicts
+    suite, cases = ros
+    found = verdicts(WithoutDescribe(), [c for c in cases if c.group == "CST"], "seed", "ros_acomms")
+    verdict, checks = found["ros_acomms/CST/definition"]
+    assert verdict.value == "UNSUPPORTED" and "no describe operation" in checks[0].detail
+    assert {v.value for cid, (v, _) in found.items() if cid != "ros_acomms/CST/definition"} <= {"PASS", "IMPL_DEFINED"}

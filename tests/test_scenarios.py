@@ -137,8 +137,17 @@ def test_unclaimed_services_are_unsupported_and_claimed_silence_fails(suite, cas
     by_id = {c.id: c for c in result.cases}
     assert by_id["imc/SmsTx/scenario/state"].verdict is Verdict.UNSUPPORTED
     assert by_id["imc/LblConfig/scenario/get-cfg"].verdict is Verdict.PASS
+    by_message = {m.name: m.verdict for m in result.messages}
+    assert by_message["SmsTx"] == "UNSUPPORTED" and by_message["LblConfig"] == "PASS"  # nothing passed for SmsTx
     silent, _ = run_virtual(suite, cases, options=options, broken="no-cur-cfg")
     assert {c.id: c.verdict for c in silent.cases}["imc/LblConfig/scenario/get-cfg"] is Verdict.FAIL
+
+
+def test_a_target_claiming_nothing_the_cases_check_exits_2(suite, cases):
+    only_sms = [c for c in cases if c.id.startswith("imc/SmsTx/")]
+    result, _ = run_virtual(suite, only_sms, options=dict(EVERYTHING, claims={"lbl"}))
+    assert {c.verdict for c in result.cases} == {Verdict.UNSUPPORTED}
+    assert result.exit_code() == 2  # nothing was tested: never a green run
 
 
 def test_a_silent_target_makes_everything_inconclusive_and_exits_2(suite, cases):

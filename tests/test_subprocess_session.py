@@ -10,13 +10,12 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import time
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
-from harness import verdicts as run_verdicts
+from harness import alive, verdicts as run_verdicts
 
 from imc_conformance.core.cases import expectation
 from imc_conformance.core.hello import check_hello
@@ -135,7 +134,6 @@ def test_answers_in_any_order_are_matched_by_id(reference):
 
 def test_a_program_that_keeps_crashing_cannot_hang_the_run():
     cases = SELECTION[:40]
-    start = time.perf_counter()
     with session(program("always-crashes"), timeout=2) as s:
         answers = answers_of(s, cases)
     kinds = [a.kind for a in answers.values()]
@@ -144,8 +142,7 @@ def test_a_program_that_keeps_crashing_cannot_hang_the_run():
                  and a.kind == "crash" and answers[cid, "decode-" + check.split("-")[1]] is a]
     assert kinds.count("crash") == MAX_RESTARTS + len(inherited)
     assert kinds.count("adapter-error") == len(kinds) - kinds.count("crash")
-    assert all("keeps crashing" in a.reason for a in answers.values() if a.kind == "adapter-error")
-    assert time.perf_counter() - start < 30
+    assert all("keeps crashing" in a.reason for a in answers.values() if a.kind == "adapter-error")  # no more restarts
 
 
 def test_an_abandoned_run_leaves_the_session_usable(reference):
@@ -227,12 +224,13 @@ def test_start_up_errors_are_clear(argv, message):
     s.close()
 
 
-def test_a_program_that_never_answers_hello_times_out():
-    s = SubprocessSession(python("import time; time.sleep(60)"), name="silent", encoding_param="byte_order", timeout=0.5)
-    start = time.perf_counter()
+def test_a_program_that_never_answers_hello_times_out(tmp_path):
+    pid_file = tmp_path / "pid"
+    code = f"import os, time; open({str(pid_file)!r}, 'w').write(str(os.getpid())); time.sleep(600)"
+    s = SubprocessSession(python(code), name="silent", encoding_param="byte_order", timeout=0.5)
     with pytest.raises(AdapterStartError, match=r"^adapter did not answer hello within 0\.5 s$"):
         s.hello()
-    assert time.perf_counter() - start < 10  # and the program was killed, not waited for
+    assert not alive(int(pid_file.read_text()))  # the program was killed, not waited for
 
 
 def test_a_file_that_is_not_executable_cannot_start(tmp_path):

@@ -97,7 +97,7 @@ class MessageResult:
 
     name: str
     key: str
-    verdict: str  # PASS | FAIL | INCONCLUSIVE (every case untested)
+    verdict: str  # PASS | FAIL | INCONCLUSIVE or UNSUPPORTED (every case untested)
     cases: list[CaseResult]
 
     @property
@@ -140,7 +140,7 @@ class RunResult:
         verdicts = {c.verdict for c in self.cases}
         if Verdict.ADAPTER_ERROR in verdicts or any(i.kind == "protocol" for i in self.incidents):
             return 2
-        if not verdicts or (Verdict.INCONCLUSIVE in verdicts and verdicts <= set(UNTESTED)):
+        if verdicts <= set(UNTESTED):
             return 2  # nothing was tested
         if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested):
             return 1
@@ -187,11 +187,14 @@ def format_version(doc) -> int:
 
 
 def message_verdict(cases: list[CaseResult], strict: bool) -> str:
-    """FAIL if a case fails; INCONCLUSIVE if no case tested anything and one could not be tested; else PASS."""
+    """FAIL if a case fails; if no case tested anything, INCONCLUSIVE when one could not be tested and UNSUPPORTED
+    when the implementation does none of them; else PASS."""
     if any(failing(c.verdict, strict) for c in cases):
         return "FAIL"
     verdicts = {c.verdict for c in cases}
-    return "INCONCLUSIVE" if Verdict.INCONCLUSIVE in verdicts and verdicts <= set(UNTESTED) else "PASS"
+    if verdicts and verdicts <= set(UNTESTED):
+        return "INCONCLUSIVE" if Verdict.INCONCLUSIVE in verdicts else "UNSUPPORTED"
+    return "PASS"
 
 
 def case_dict(c: CaseResult) -> dict:

@@ -28,7 +28,7 @@ TONE = {
     Verdict.NON_STRICT: "warn", Verdict.WAIVER_STALE: "warn", Verdict.IMPL_DEFINED: "info",
     Verdict.UNSUPPORTED: "mute", Verdict.WAIVED: "mute", Verdict.INCONCLUSIVE: "info",
 }
-GROUP_TONE = {"PASS": "ok", "FAIL": "bad", "INCONCLUSIVE": "info"}
+GROUP_TONE = {"PASS": "ok", "FAIL": "bad", "INCONCLUSIVE": "info", "UNSUPPORTED": "mute"}
 
 
 @cache

@@ -13,7 +13,7 @@ EMOJI = {
     Verdict.UNSUPPORTED: "⏭️", Verdict.CRASH: "💥", Verdict.TIMEOUT: "⏱️", Verdict.ADAPTER_ERROR: "🛠️",
     Verdict.WAIVED: "🙈", Verdict.WAIVER_STALE: "🧹", Verdict.INCONCLUSIVE: "❔",
 }
-OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸️", "INCONCLUSIVE": "❔"}
+OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸️", "INCONCLUSIVE": "❔", "UNSUPPORTED": "⏭️"}
 MAX_CASES = 50
 MAX_DETAIL = 300
 MAX_TIMELINES = 10  # scenarios whose timeline is shown

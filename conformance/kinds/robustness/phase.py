@@ -244,7 +244,7 @@ class PhaseMachine:
     def _revive(self, probes: list[Probe]):
         """Restart the node after a bisection; whether the probes are served again (else the phase stops)."""
         problem = yield _Restart()
-        if problem is None and (yield from self._round(probes, "after a restart, before going on")):
+        if problem is None and (yield from self._round(probes, "after a restart, before going on", self._revival())):
             problem = "after a restart the node did not serve the probe again"
         if problem is not None:
             self._log("restart", f"the phase stops: {problem}")
@@ -270,7 +270,8 @@ class PhaseMachine:
         candidates = block
         while True:
             problem = yield _Restart()
-            if problem is None and (yield from self._round(probes, "after a restart, before bisecting further")):
+            if problem is None and (yield from self._round(probes, "after a restart, before bisecting further",
+                                                           self._revival())):
                 problem = "after a restart the node did not serve the probe again"
             if problem is not None:
                 self._log("restart", f"cannot bisect: {problem}")
@@ -280,28 +281,34 @@ class PhaseMachine:
             silent = bool((yield from self._round(probes, f"bisecting: after {_span(half)}")))
             if len(candidates) == 1:
                 what = (f"bisected: the frame {_name(half[0])} alone silences it" if silent else
-                        f"bisected: no single frame does it alone, the block as a whole does (last candidate "
-                        f"{_name(half[0])})")
+                        f"not reproduced by a single frame: the last candidate, {_name(half[0])}, did not silence "
+                        f"it alone (several frames together do, or the node's state at the time did)")
                 self._log("bisect", what)
                 return what
             candidates = half if silent else candidates[len(half):]
 
     # ------------------------------------------------------------------ probing
 
-    def _round(self, probes: list[Probe], when: str):
-        """Ask every probe at once (and again, up to each probe's tries) and wait for the replies that show each
-        request kind is served; the probes that got none."""
-        waiting = {id(p): p for p in probes}
-        for attempt in range(1, max((p.program.case["probe"].get("tries", 2) for p in probes), default=0) + 1):
+    def _round(self, probes: list[Probe], when: str, patience: float = 0.0):
+        """Ask every probe at once (and again, up to each probe's tries, and for ``patience`` seconds: a node just
+        restarted may take a while to serve again) and wait for the replies that show each request kind is served;
+        the probes that got none."""
+        waiting, until, attempt = {id(p): p for p in probes}, self.now + patience, 0
+        tries = dict.fromkeys(waiting, 0)
+        while waiting:
+            attempt += 1
             asked = {}
             for probe in waiting.values():
                 spec = probe.program.case["probe"]
-                if attempt > spec.get("tries", 2):
+                if attempt > spec.get("tries", 2) and self.now >= until:
                     continue
+                tries[id(probe)] += 1
                 accepts, composed = self._ask(probe, spec)
                 if composed is not None:
                     yield _Send(composed)
                 asked[id(probe)] = (probe, accepts, self.now + self._scaled(spec["within"]))
+            if not asked:
+                break
             while asked:
                 got = yield _Wait(min(d for _, _, d in asked.values()),
                                   lambda parsed: any(a(parsed) for _, a, _ in asked.values()))
@@ -313,12 +320,10 @@ class PhaseMachine:
                         got = None
                     elif deadline <= self.now:
                         del asked[key]
-            if not waiting:
-                break
-        for probe in waiting.values():
+        for key, probe in waiting.items():
             spec = probe.program.case["probe"]
             self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within {spec['within']} s "
-                               f"({spec.get('tries', 2)} tries)", probe)
+                               f"({tries[key]} tries)", probe)
         return list(waiting.values())
 
     def _ask(self, probe: Probe, spec: dict):
@@ -392,6 +397,10 @@ class PhaseMachine:
 
     def _rel(self, t: float) -> float:
         return round(t - self.t0, 3)
+
+    def _revival(self) -> float:
+        """How long a restarted node is given to serve the probes again."""
+        return self._scaled(self.phase.settings["revive"])
 
     def _scaled(self, seconds: float) -> float:
         return float(seconds) * self.phase.time_scale

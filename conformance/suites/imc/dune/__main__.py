@@ -14,8 +14,8 @@ def main(argv: list[str]) -> int:
         from .conformance import main as conformance
         return conformance(rest)
     if command == "restart":
-        from .conformance import restart_vehicle
-        return restart_vehicle(rest)
+        from .conformance import restart_world
+        return restart_world(rest)
     print("usage: python -m imc_conformance.suites.imc.dune build | conformance [--reports DIR] [--no-robustness] | "
           "restart --run DIR", file=sys.stderr)
     return 2

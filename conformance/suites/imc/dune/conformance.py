@@ -4,8 +4,8 @@ DUNE as a live node, under the ``seed`` profile and under the ``dune`` profile.
 It runs inside a private network namespace it creates (``unshare -n``: loopback up, multicast routed to loopback,
 nothing outside reachable), because DUNE announces itself on a multicast group and its acoustic modem simulator
 talks over another. There it starts the Iridium gateway stand-in, DUNE's acoustic peer and DUNE as the vehicle,
-runs ``imc-conformance run --target`` once per profile (the vehicle restarted fresh in between; the robustness
-phase restarts it to bisect), captures the exchange on loopback, stops everything it started by PID and checks that
+runs ``imc-conformance run --target`` once per profile (vehicle and peer restarted fresh in between; the
+robustness phase restarts both to bisect), captures the exchange on loopback, stops everything it started by PID and checks that
 no DUNE process is left. It writes ``reports/dune-<profile>.{json,html}`` and ``reports/dune-exchange.pcap``, then runs
 the expectations test (``tests/dune_expectations.py``: the verdict per message DUNE is known to get).
 """
@@ -100,8 +100,10 @@ def _run(args) -> int:
     try:
         for i, profile in enumerate(PROFILES):
             if i:
-                restart(run, "vehicle", VEHICLE)
+                _restart_both(run)
             codes[profile] = _suite(args, run, profile)
+            if codes[profile] == 130:  # the run was interrupted (Ctrl-C, SIGTERM): so is the whole job
+                raise KeyboardInterrupt
     except KeyboardInterrupt:
         print("make dune-conformance: interrupted", file=sys.stderr)
         return 130
@@ -188,11 +190,18 @@ def _expectations(args) -> int:
                           cwd=args.checkout, env=env).returncode
 
 
-def restart_vehicle(argv: list[str]) -> int:
-    """``--restart-cmd`` of the robustness phase: restart the vehicle (its state forgotten)."""
+def _restart_both(run: Path) -> None:
+    """Restart the peer and then the vehicle, both with their state forgotten: the vehicle's acoustic stack keeps
+    state about its peer (a pending operation, the modem's busy flag) that a vehicle-only restart leaves stale."""
+    restart(run, "peer", PEER)
+    restart(run, "vehicle", VEHICLE)
+
+
+def restart_world(argv: list[str]) -> int:
+    """``--restart-cmd`` of the robustness phase: restart the vehicle and its acoustic peer (state forgotten)."""
     parser = argparse.ArgumentParser(prog="python -m imc_conformance.suites.imc.dune restart")
     parser.add_argument("--run", type=Path, required=True)
     args = parser.parse_args(argv)
-    restart(args.run, "vehicle", VEHICLE)
+    _restart_both(args.run)
     return 0
 

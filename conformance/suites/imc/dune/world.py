@@ -4,7 +4,7 @@ gateway. The configuration files are written by this module (DUNE's own lauv-sim
 from them, stays as DUNE ships it), and every process is started in a session of its own and stopped by its PID.
 
 Process bookkeeping lives in a run folder (a PID file and the command of each process) so that a separate
-process, the ``--restart-cmd`` the robustness phase calls, can restart the vehicle.
+process, the ``--restart-cmd`` the robustness phase calls, can restart the vehicle and its peer.
 """
 
 from __future__ import annotations
