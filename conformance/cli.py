@@ -373,8 +373,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_suite(gen)
     gen.add_argument("--check", action="store_true", help="only report drift; exit 1 if any")
     gen.set_defaults(func=command_generate)
+    from .capture_command import add_command
     from .suites import load_suite
 
+    add_command(sub, add_suite, add_reports, positive_seconds)
     for name in suite_names():
         load_suite(name).commands(sub)
     return parser

@@ -120,6 +120,10 @@ class Suite(ABC):
         ``restart`` (a function restarting the target, or None)."""
         raise ValueError(f"the suite {self.name!r} has no live targets")
 
+    def capture_rules(self):
+        """What the suite judges in captures (``capture.findings.CaptureRules``); ValueError if it has none."""
+        raise ValueError(f"the suite {self.name!r} is not carried in datagrams: it has no captures to judge")
+
     def profile(self, name: str) -> dict:
         """The profile ``name`` of the suite's scenarios (``profiles/<name>.json``); ValueError if unknown."""
         raise ValueError(f"the suite {self.name!r} has no profiles")

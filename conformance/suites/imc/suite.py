@@ -120,6 +120,10 @@ class ImcSuite(DataSuite):
         from .node.serve import add_command
         add_command(subparsers, lambda: self)
 
+    def capture_rules(self):
+        from .capture import ImcCaptureRules
+        return ImcCaptureRules(self.defs, self.wire, self.rules, self.behaviour)
+
     def open_target(self, target: str, **settings):
         from .live import open_target
         return open_target(self, target, **settings)

@@ -1,0 +1,145 @@
+"""``imc-conformance pcap``: judge captured traffic (pcap, pcapng) frame by frame and exchange by exchange."""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import ipaddress
+import mmap
+import sys
+import time
+from pathlib import Path
+
+from .capture.judge import CaptureJudge, Selection
+from .capture.records import CaptureError, records
+
+
+def address(text: str) -> str | int:
+    """An IP address, or a system id (decimal or 0x hex), for --src/--dst/--host (argparse type)."""
+    try:
+        return ipaddress.ip_address(text).compressed
+    except ValueError:
+        pass
+    try:
+        value = int(text, 0)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= 0xFFFF:
+        raise argparse.ArgumentTypeError(f"{text!r}: give an IP address or a system id (0 to 0xFFFF, decimal or 0x hex)")
+    return value
+
+
+def port(text: str) -> int:
+    if not text.isdigit() or not 0 < int(text) < 65536:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a UDP port")
+    return int(text)
+
+
+def seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r}: give seconds from the capture's first record (0 or more)")
+    return value
+
+
+def count(text: str) -> int:
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number")
+    return int(text)
+
+
+def add_command(sub, add_suite, add_reports, positive_seconds) -> None:
+    pcap = sub.add_parser("pcap", help="judge captured traffic (pcap or pcapng): every frame, every exchange")
+    pcap.add_argument("files", nargs="+", metavar="FILE", help="pcap or pcapng captures (Ethernet, raw IP, Linux "
+                                                                "cooked SLL/SLL2, BSD loopback; IPv4 and IPv6)")
+    add_suite(pcap)
+    pcap.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
+    pcap.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
+                      help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")
+    pcap.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
+    pcap.add_argument("--src", type=address, metavar="ADDR|ID", help="only datagrams from this IP address or system id")
+    pcap.add_argument("--dst", type=address, metavar="ADDR|ID", help="only datagrams to this IP address or system id")
+    pcap.add_argument("--host", type=address, metavar="ADDR|ID",
+                      help="only datagrams from or to this IP address or system id (keeps whole exchanges)")
+    pcap.add_argument("--start", type=seconds, metavar="SECONDS", help="only from this many seconds into the capture")
+    pcap.add_argument("--end", type=seconds, metavar="SECONDS", help="only until this many seconds into the capture")
+    pcap.add_argument("--list-frames", type=count, default=20, metavar="N",
+                      help="failing frames listed per message and rule (default 20)")
+    pcap.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
+                      help="multiply every exchange's time bound by F (slow links)")
+    pcap.add_argument("--strict", action="store_true", help="NON_STRICT (a SHOULD not met) and INCONCLUSIVE fail too")
+    add_reports(pcap)
+    pcap.set_defaults(func=command_pcap)
+
+
+def command_pcap(args) -> int:
+    from .cli import UsageError, report_targets, terminal, write_reports
+    from .render.terminal import print_result
+    from .suites import load_suite
+
+    targets = report_targets(args)
+    suite = load_suite(args.suite)
+    try:
+        rules = suite.capture_rules()
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    edition = args.edition or suite.editions[0]
+    if edition not in suite.editions:
+        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
+    unknown = set(args.message) - set(rules.keys)
+    if unknown:
+        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    if args.start is not None and args.end is not None and args.end < args.start:
+        raise UsageError(f"--end {args.end:g} is before --start {args.start:g}")
+    selection = Selection(frozenset(args.port) or None, frozenset(args.message), args.src, args.dst, args.host,
+                          args.start, args.end, args.list_frames, args.time_scale)
+    judge = CaptureJudge(suite.name, rules, edition, selection)
+    started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+    began = time.perf_counter()
+    damage, complete = [], True
+    try:
+        for path in args.files:
+            damage += judge_file(judge, Path(path), len(args.files) > 1)
+    except KeyboardInterrupt:
+        complete = False
+    if judge.records and not judge.datagrams and any("not Ethernet" in why for why in judge.skipped):
+        raise UsageError(f"{'; '.join(why for why in judge.skipped if 'not Ethernet' in why)}: nothing to judge")
+    result = judge.result(implementation=", ".join(Path(p).name for p in args.files), started=started,
+                          duration=round(time.perf_counter() - began, 3), strict=args.strict, title=suite.title,
+                          notes=damage, complete=complete)
+    console = terminal()
+    print_result(result, console)
+    problems = write_reports(result, targets, console)
+    for line in damage:
+        print(f"imc-conformance: {line}", file=sys.stderr)
+    if not complete:
+        return result.exit_code()
+    return 2 if problems or damage else result.exit_code()
+
+
+def judge_file(judge: CaptureJudge, path: Path, named: bool) -> list[str]:
+    """Feed every record of the capture at ``path``; the damage found (the records before it are judged)."""
+    from .cli import UsageError
+
+    try:
+        with path.open("rb") as handle:
+            size = path.stat().st_size
+            if size == 0:
+                raise UsageError(f"{path}: empty file, not a capture")
+            with mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as buf:
+                source = f"{path.name} " if named else ""
+                try:
+                    for record in records(buf):
+                        judge.feed(record, source)
+                except CaptureError as exc:
+                    if not judge.records:
+                        raise UsageError(f"{path}: {exc}") from None
+                    return [f"{path}: {exc}; the records before it are judged"]
+    except OSError as exc:
+        raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from exc
+    except ValueError as exc:  # mmap of something that is not a regular file
+        raise UsageError(f"cannot read {path}: {exc}") from exc
+    return []

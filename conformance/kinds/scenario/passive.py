@@ -1,0 +1,210 @@
+"""The exchange rules of a suite (exchanges.json) applied to exchanges the suite only watched (a capture, a
+monitor): a request never answered within its bound, a reply echoing another value than its request's, a reply
+to another system or from another node, a status after a terminal one, a sequence that never ends. Sans-IO.
+
+Requests are matched to replies as the scenario engine does, by the exchange's echo fields. A capture can
+begin in the middle of an exchange or miss a frame, so a reply that echoes no request seen is set aside; it
+is a finding only when a request of its addressee then goes unanswered (the reply did not echo it).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+from ...capture.findings import Finding, Watched
+from ...core.verdicts import Verdict
+from .exchanges import resolved
+from .matchers import hashable, same, show
+from .wire import Parsed
+
+LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT}
+
+
+@dataclass
+class _Rule:
+    """An exchange with the names it uses resolved to the values on the wire for one edition."""
+
+    exchange: dict
+    when: dict[str, frozenset]
+    reply_when: dict[str, frozenset]
+    echoes: list[dict]
+    terminal: frozenset | None
+    within: float
+
+
+@dataclass(slots=True)
+class _Open:
+    rule: _Rule
+    request: Watched
+    key: tuple
+    deadline: float
+    answered: bool = False
+    terminal: Watched | None = None
+    orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
+
+
+class PassiveExchanges:
+    """A tracker of one capture's exchanges. ``anyone``: the system id meaning "no system in particular"."""
+
+    def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None):
+        self.wire, self.anyone = wire, anyone
+        self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
+        self.by_request: dict[str, list[_Rule]] = {}
+        self.by_reply: dict[str, list[_Rule]] = {}
+        for rule in self.rules:
+            self.by_request.setdefault(rule.exchange["request"]["message"], []).append(rule)
+            self.by_reply.setdefault(rule.exchange["reply"], []).append(rule)
+        self.open: dict[int, deque[_Open]] = {id(r): deque() for r in self.rules}  # in deadline order
+        self.ended: dict[int, deque[_Open]] = {id(r): deque() for r in self.rules}  # answered, kept one more bound
+        self.keyed: dict[tuple, list[_Open]] = {}
+        self.next_deadline = float("inf")
+
+    @property
+    def messages(self) -> set[str]:
+        """The messages whose fields the tracker needs."""
+        return set(self.by_request) | set(self.by_reply)
+
+    def observe(self, w: Watched) -> list[Finding]:
+        out = self._expire(w.time) if w.time > self.next_deadline else []
+        for rule in self.by_reply.get(w.message, ()):
+            if _matches(w.fields, rule.reply_when):
+                out += self._reply(rule, w)
+        for rule in self.by_request.get(w.message, ()):
+            if _matches(w.fields, rule.when):
+                self._request(rule, w)
+                break
+        return out
+
+    def finish(self, end: float) -> list[Finding]:
+        """Judge what the end of the capture decides; a request whose bound reaches past it is INCONCLUSIVE."""
+        out = self._expire(end)
+        for o in (o for queue in self.open.values() for o in queue):
+            if not o.answered:
+                out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
+                                         f"the capture ends {end - o.request.time:.3f} s after the request, before "
+                                         f"its bound of {o.deadline - o.request.time:g} s", o.request))
+        return out
+
+    # ------------------------------------------------------------ requests
+
+    def _request(self, rule: _Rule, w: Watched) -> None:
+        key = tuple(hashable(w.fields.get(e["request_field"])) for e in rule.echoes)
+        same_key = self.keyed.setdefault((id(rule), key), [])
+        if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
+               for o in same_key):
+            return  # a resend of an open request is the same exchange
+        o = _Open(rule, w, key, w.time + rule.within)
+        same_key.append(o)
+        self.open[id(rule)].append(o)
+        self.next_deadline = min(self.next_deadline, o.deadline)
+
+    # ------------------------------------------------------------ replies
+
+    def _reply(self, rule: _Rule, w: Watched) -> list[Finding]:
+        if rule.echoes:
+            key = tuple(hashable(w.fields.get(e["reply_field"])) for e in rule.echoes)
+            mine = self.keyed.get((id(rule), key), ())
+        else:  # replies correlate by addressing alone
+            mine = [o for o in self.open[id(rule)] if o.request.src == w.dst or w.dst == self.anyone]
+        # the oldest request not yet answered, else the latest (whose statuses go on)
+        o = next((o for o in mine if not o.answered and self._from_node(o, w)), None) or next(
+            (o for o in reversed(mine) if self._from_node(o, w)), None)
+        if o is None:
+            if rule.echoes:
+                for other in self.open[id(rule)]:
+                    if not other.answered and other.request.src == w.dst and self._from_node(other, w):
+                        other.orphans.append(w)
+            return []
+        ex, out = rule.exchange, []
+        for c in ex["correlation"]:
+            if c["kind"] == "to-requester":
+                ok = w.dst == o.request.src
+                out.append(self._finding(o, "to-requester", Verdict.PASS if ok else LEVELS[c["level"]], c["clause"],
+                                         "" if ok else f"{w.message} sent to system {show(w.dst)}, not to the "
+                                                       f"requester {show(o.request.src)}", w))
+        if not o.answered:
+            o.answered = True
+            late = w.time > o.deadline
+            out.append(self._finding(o, "answered", LEVELS[ex["level"]] if late else Verdict.PASS, ex["clause"],
+                                     f"{w.message} {w.time - o.request.time:.3f} s after the request"
+                                     + (f", past its bound of {o.deadline - o.request.time:g} s" if late else ""), w))
+        if rule.terminal is not None:
+            out += self._state(o, w)
+        return out
+
+    def _state(self, o: _Open, w: Watched) -> list[Finding]:
+        state = o.rule.exchange["state"]
+        value = w.fields.get(state["field"])
+        if o.terminal is not None:
+            return [self._finding(o, "after-terminal", Verdict.FAIL, state["clause"],
+                                  f"{w.message} {state['field']}={self._name(w.message, state['field'], value)} after "
+                                  f"the terminal state (frame {o.terminal.number})", w)]
+        if hashable(value) in o.rule.terminal:
+            o.terminal = w
+            return [self._finding(o, "terminal", Verdict.PASS, state["clause"], "", w)]
+        return []
+
+    def _from_node(self, o: _Open, w: Watched) -> bool:
+        return o.request.dst in (None, self.anyone) or w.src == o.request.dst
+
+    # ------------------------------------------------------------ bounds
+
+    def _expire(self, now: float) -> list[Finding]:
+        out = []
+        for rid, queue in self.open.items():
+            while queue and queue[0].deadline < now:
+                o = queue.popleft()
+                out += self._judge_expired(o)
+            ended = self.ended[rid]
+            while ended and now - ended[0].deadline > ended[0].deadline - ended[0].request.time:
+                gone = ended.popleft()
+                self.keyed[(rid, gone.key)].remove(gone)
+        self.next_deadline = min((q[0].deadline for q in self.open.values() if q), default=float("inf"))
+        return out
+
+    def _judge_expired(self, o: _Open) -> list[Finding]:
+        ex, bound = o.rule.exchange, o.deadline - o.request.time
+        if not o.answered:
+            self.keyed[(id(o.rule), o.key)].remove(o)
+            if o.orphans and o.rule.echoes:
+                e, w = o.rule.echoes[0], o.orphans[0]
+                return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
+                                      f"no {ex['reply']} echoed {e['request_field']}="
+                                      f"{show(o.request.fields.get(e['request_field']))} within {bound:g} s; this one "
+                                      f"carries {e['reply_field']}={show(w.fields.get(e['reply_field']))}", w)]
+            return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
+                                  f"no {ex['reply']} within {bound:g} s", o.request)]
+        self.ended[id(o.rule)].append(o)
+        if o.rule.terminal is not None and o.terminal is None:
+            return [self._finding(o, "terminal", LEVELS[ex["level"]], ex["state"]["clause"],
+                                  f"no terminal {ex['reply']} within {bound:g} s", o.request)]
+        return []
+
+    # ------------------------------------------------------------ shared
+
+    def _finding(self, o: _Open, aspect: str, verdict: Verdict, clause: str, detail: str, w: Watched) -> Finding:
+        if detail and w is not o.request:
+            detail = f"request frame {o.request.number}: {detail}"
+        return Finding(o.request.message, f"exchange/{o.rule.exchange['id']}/{aspect}", verdict, clause, detail,
+                       w.number, w.time, None, w.where)
+
+    def _name(self, message: str, path: str, value) -> str:
+        named = self.wire.present(Parsed(None, message, {"fields": {path: value}}))
+        return show(named.get("fields", {}).get(path, value))
+
+    def _resolve(self, ex: dict, edition: str, scale: float) -> _Rule:
+        def values(message: str, when: dict) -> dict[str, frozenset]:
+            return {f: frozenset(hashable(v) for v in resolved(self.wire, message, f, names, edition))
+                    for f, names in when.items()}
+
+        state = ex.get("state")
+        return _Rule(ex, values(ex["request"]["message"], ex["request"].get("when", {})),
+                     values(ex["reply"], ex.get("reply_when", {})),
+                     [c for c in ex["correlation"] if c["kind"] == "echo"],
+                     values(ex["reply"], {state["field"]: state["terminal"]})[state["field"]] if state else None,
+                     ex["within"] * scale)
+
+
+def _matches(fields: dict, when: dict[str, frozenset]) -> bool:
+    return all(hashable(fields.get(f)) in values for f, values in when.items())

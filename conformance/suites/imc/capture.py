@@ -1,0 +1,86 @@
+"""What the IMC suite judges in captures: the frame at the start of each datagram on the IMC ports (the first
+only, as DUNE reads one frame a datagram), by the reference codec's rules, and the exchanges of exchanges.json.
+
+A fast path checks what every frame needs (sync, header, size, a C-accelerated CRC-16/ARC) and decodes the
+payload only where the frame's validity or an exchange depends on it: a message of fixed-size fields is valid
+when its payload is at least their size.
+"""
+
+from __future__ import annotations
+
+import struct
+
+from .crc16 import crc16 as arc
+
+from ...capture.findings import Frame
+from ...kinds.scenario.passive import PassiveExchanges
+from ...kinds.vector.errors import FrameError
+from . import codec
+from .definitions import Definitions
+from .wire import UNKNOWN_SYSTEM, ImcWire
+
+PORTS = frozenset([*range(6001, 6031), *range(30100, 30105)])  # DUNE's node ports and its discovery ports
+SEEN_LIMIT = 1 << 16  # decoded payloads remembered (repeated statuses and requests decode once)
+UNIDENTIFIED = "unidentified"  # frames whose message id cannot be read or is the null id
+HEAD = {b"\x54\xfe": struct.Struct("<HHH"), b"\xfe\x54": struct.Struct(">HHH")}
+ADDRESSING = {b"\x54\xfe": struct.Struct("<HBH"), b"\xfe\x54": struct.Struct(">HBH")}
+
+
+class ImcCaptureRules:
+    ports = PORTS
+
+    def __init__(self, defs: Definitions, wire: ImcWire, rules: list[dict], behaviour: dict | None):
+        self.defs, self.wire, self.behaviour = defs, wire, behaviour
+        self.clauses = {r["id"]: r["clause"] for r in rules}
+        self.ours = {m.id: m.abbrev for m in defs.suite_messages}
+        self.keys = {m.abbrev: str(m.id) for m in defs.suite_messages} | {UNIDENTIFIED: "-"}
+        self.fixed = {m.id: sum(f.size for f in m.fields) for m in defs.messages if all(f.is_scalar for f in m.fields)}
+        self.watched: set[int] = set()
+        self.seen: dict[bytes, dict] = {}  # decoded fields by payload, for the watched messages
+
+    def exchanges(self, edition: str, scale: float) -> PassiveExchanges:
+        tracker = PassiveExchanges(self.wire, (self.behaviour or {}).get("exchanges", []), edition, scale, UNKNOWN_SYSTEM)
+        self.watched = {self.defs[m].id for m in tracker.messages}
+        return tracker
+
+    def frame(self, p: bytes) -> Frame | None:
+        head = HEAD.get(p[:2])
+        if head is None:
+            return None  # no IMC synchronization number: not an IMC frame
+        n = len(p)
+        if n < 6:
+            return self._decoded(p, UNIDENTIFIED)
+        _, mgid, size = head.unpack_from(p)
+        group = self.ours.get(mgid)
+        end = codec.HEADER_SIZE + size
+        whole = n >= end + codec.FOOTER_SIZE and size <= self.defs.max_payload
+        sound = whole and arc(p[:end]) == struct.unpack_from(head.format[0] + "H", p, end)[0]
+        if group is None:  # a message the suite does not cover: its framing is judged, not its fields
+            if not sound or mgid == self.defs.null_id:
+                return self._decoded(p, UNIDENTIFIED)
+            known = self.defs.by_id.get(mgid)
+            return Frame(None, outside=known.abbrev if known else f"id {mgid}")
+        if not sound:
+            return self._decoded(p, group)
+        src, _, dst = ADDRESSING[p[:2]].unpack_from(p, 14)
+        fixed = self.fixed.get(mgid)
+        if mgid not in self.watched and fixed is not None and size >= fixed:
+            return Frame(group, src=src, dst=dst)  # fixed-size fields, all there: valid
+        payload = p[:4] + p[codec.HEADER_SIZE:end]  # what the fields' verdict depends on: byte order, id, payload
+        known = self.seen.get(payload)
+        if known is None:
+            known = self._decoded(p, group)
+            if len(self.seen) >= SEEN_LIMIT:
+                self.seen.clear()
+            self.seen[payload] = known
+        if known.rule is not None:
+            return known
+        return Frame(group, fields=known.fields if mgid in self.watched else None, src=src, dst=dst)
+
+    def _decoded(self, p: bytes, group: str) -> Frame:
+        try:
+            decoded = codec.decode(self.defs, p)
+        except FrameError as exc:
+            return Frame(group, exc.rule, exc.offset, exc.detail, self.clauses.get(exc.rule, ""))
+        header = decoded["header"]
+        return Frame(group, fields=decoded["fields"], src=header["src"], dst=header["dst"])
