@@ -111,7 +111,9 @@ def same(a, b) -> bool:
 
 
 def hashable(value):
-    """A decoded value usable as a key (lists become tuples)."""
+    """A decoded value usable as a key (lists become tuples, objects sorted tuples of their items)."""
+    if isinstance(value, dict):
+        return tuple(sorted((k, hashable(v)) for k, v in value.items()))
     return tuple(hashable(v) for v in value) if isinstance(value, list) else value
 
 

@@ -1,0 +1,398 @@
+"""Captures: every link layer, capture format and IP feature the pcap command reads, every frame rule of the
+corpus found in captured datagrams, every exchange rule caught in captured exchanges, and bad input."""
+
+from __future__ import annotations
+
+import json
+import struct
+from decimal import Decimal
+
+import pytest
+from scapy.layers.inet import IP, UDP, fragment
+from scapy.layers.inet6 import IPv6, IPv6ExtHdrFragment, fragment6
+from scapy.layers.l2 import CookedLinux, CookedLinuxV2, Dot1AD, Dot1Q, Ether, Loopback
+from scapy.packet import Raw
+from scapy.utils import PcapNgWriter, wrpcap
+
+from imc_conformance.capture.judge import CaptureJudge, Selection
+from imc_conformance.capture.records import CaptureError, records
+from imc_conformance.capture.writing import PCAP_HEADER, ethernet_udp, pcap_record
+from imc_conformance.cli import main
+from imc_conformance.core.cases import expectation
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.files import open_corpus
+from imc_conformance.suites import load_suite
+from imc_conformance.suites.imc import codec
+from imc_conformance.suites.imc.traffic import write_capture
+
+SUITE = load_suite("imc")
+DEFS = SUITE.defs
+EDITION = "imc-5.4.30"
+STATION, VEHICLE = 0x4CF0, 30
+T0 = 1_700_000_000.0
+
+
+def frame(abbrev: str, fields: dict | None = None, src: int = STATION, dst: int = VEHICLE, order: str = "le") -> bytes:
+    header = {"timestamp": 1.0, "src": src, "src_ent": 255, "dst": dst, "dst_ent": 255}
+    return codec.encode(DEFS, {"abbrev": abbrev, "header": header, "fields": fields or {}}, order)
+
+
+def named(message: str, field: str, name: str) -> int:
+    return SUITE.wire.resolve(message, field, name, EDITION)
+
+
+def judge(buf: bytes, **selection):
+    j = CaptureJudge("imc", SUITE.capture_rules(), EDITION, Selection(**selection))
+    for record in records(buf):
+        j.feed(record)
+    return j.result(implementation="test", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False,
+                    title="IMC")
+
+
+def cases(result) -> dict:
+    return {c.id: c for c in result.cases}
+
+
+def pcap(items, linktype: int = 1) -> bytes:
+    """A microsecond pcap of (seconds after T0, link-layer bytes) records."""
+    head = PCAP_HEADER[:20] + struct.pack("<I", linktype)
+    return head + b"".join(pcap_record(T0 + t, data) for t, data in items)
+
+
+def udp(payload: bytes, src=("10.0.0.1", 6001), dst=("10.0.0.30", 6002)) -> bytes:
+    return ethernet_udp(src[0], src[1], dst[0], dst[1], payload)
+
+
+# ---------------------------------------------------------------- link layers, formats, IP
+
+HEARTBEAT = frame("Heartbeat", src=VEHICLE, dst=0xFFFF)
+INNER = IP(src="10.0.0.1", dst="10.0.0.30") / UDP(sport=6001, dport=6002) / Raw(HEARTBEAT)
+LINKS = {
+    "ethernet": (Ether() / INNER, 1),
+    "vlan": (Ether() / Dot1Q(vlan=7) / INNER, 1),
+    "qinq": (Ether() / Dot1AD(vlan=3) / Dot1Q(vlan=7) / INNER, 1),
+    "sll": (CookedLinux(proto=0x0800) / INNER, 113),
+    "sll2": (CookedLinuxV2(proto=0x0800) / INNER, 276),
+    "bsd-loopback": (Loopback(type=2) / INNER, 0),
+    "raw-ip": (INNER, 101),
+    "ipv6": (Ether() / IPv6(src="fd00::1", dst="fd00::30") / UDP(sport=6001, dport=6002) / Raw(HEARTBEAT), 1),
+}
+
+
+@pytest.mark.parametrize("link", LINKS)
+def test_every_link_layer_is_read(link, tmp_path):
+    packet, linktype = LINKS[link]
+    packet.time = T0 + 0.25
+    wrpcap(str(tmp_path / "c.pcap"), [packet], linktype=linktype)
+    result = judge((tmp_path / "c.pcap").read_bytes())
+    valid = cases(result)["imc/Heartbeat/capture/frame/valid"]
+    assert valid.verdict is Verdict.PASS and valid.checks[0].detail.startswith("1 frame")
+    assert "1 records, 1 datagrams" in result.notes[0]
+
+
+def test_microsecond_nanosecond_big_endian_and_pcapng_captures_give_the_same_times(tmp_path):
+    bad = bytearray(HEARTBEAT)
+    bad[-1] ^= 1
+    packets = [Ether() / IP(src="10.0.0.1", dst="10.0.0.30") / UDP(sport=6001, dport=6002) / Raw(data)
+               for data in (HEARTBEAT, bytes(bad))]
+    packets[0].time, packets[1].time = Decimal(int(T0)) + Decimal("0.5"), Decimal(int(T0)) + Decimal("1.000001")
+    wrpcap(str(tmp_path / "us.pcap"), packets)
+    wrpcap(str(tmp_path / "ns.pcap"), packets, nano=True)
+    writer = PcapNgWriter(str(tmp_path / "c.pcapng"))
+    for p in packets:
+        writer.write(p)
+    writer.close()
+    little = (tmp_path / "us.pcap").read_bytes()
+    big = b"\xa1\xb2\xc3\xd4" + b"".join(  # the same capture written by a big-endian machine
+        struct.pack(">" + fmt, *struct.unpack("<" + fmt, little[a:b]))
+        for fmt, a, b in (("HHiIII", 4, 24),)) + b"".join(
+        struct.pack(">IIII", *struct.unpack_from("<IIII", little, pos)) + little[pos + 16:pos + 16 + n]
+        for pos, n in _records(little))
+    for name, buf in [("us", little), ("ns", (tmp_path / "ns.pcap").read_bytes()), ("be", big),
+                      ("ng", (tmp_path / "c.pcapng").read_bytes())]:
+        got = list(records(buf))
+        assert [r.number for r in got] == [1, 2], name
+        assert got[1].time - got[0].time == pytest.approx(0.500001, abs=1e-6), name
+        crc = cases(judge(buf))["imc/Heartbeat/capture/frame/crc"]
+        assert crc.checks[1].check == "frame 2" and "at 0.500001 s" in crc.checks[1].detail, name
+
+
+def _records(buf: bytes):
+    pos = 24
+    while pos < len(buf):
+        n = struct.unpack_from("<I", buf, pos + 8)[0]
+        yield pos, n
+        pos += 16 + n
+
+
+def test_ip_fragments_are_reassembled_in_any_order(tmp_path):
+    big = frame("AcousticSystems", {"list": "x" * 3000}, src=VEHICLE, dst=STATION)
+    v4 = fragment(IP(src="10.0.0.30", dst="10.0.0.1", id=77) / UDP(sport=6002, dport=6001) / Raw(big), fragsize=1000)
+    v6 = fragment6(IPv6(src="fd00::30", dst="fd00::1") / IPv6ExtHdrFragment(id=9) / UDP(sport=6002, dport=6001)
+                   / Raw(big), 1200)
+    packets = [Ether() / p for p in list(reversed(v4)) + v6[1:] + v6[:1]]
+    for i, p in enumerate(packets):
+        p.time = T0 + i / 100
+    wrpcap(str(tmp_path / "f.pcap"), packets)
+    result = judge((tmp_path / "f.pcap").read_bytes())
+    valid = cases(result)["imc/AcousticSystems/capture/frame/valid"]
+    assert valid.checks[0].detail.startswith("2 frames")
+    assert not any("reassembled" in n for n in result.notes)
+
+
+def test_a_fragment_never_completed_is_noted(tmp_path):
+    big = frame("AcousticSystems", {"list": "x" * 3000}, src=VEHICLE, dst=STATION)
+    parts = fragment(IP(src="10.0.0.30", dst="10.0.0.1", id=78) / UDP(sport=6002, dport=6001) / Raw(big), fragsize=1000)
+    wrpcap(str(tmp_path / "f.pcap"), [Ether() / p for p in parts[:-1]])
+    result = judge((tmp_path / "f.pcap").read_bytes())
+    assert "1 IP datagrams never reassembled (fragments missing from the capture)" in result.notes
+    assert result.exit_code() == 2  # nothing was judged
+
+
+def test_a_datagram_cut_by_the_snaplen_is_inconclusive_not_invalid():
+    whole = udp(frame("LblRange", {"id": 1, "range": 5.0}, src=VEHICLE, dst=STATION))
+    cut = struct.pack("<IIII", int(T0), 0, 50, len(whole)) + whole[:50]
+    result = judge(PCAP_HEADER + cut)
+    case = cases(result)["imc/LblRange/capture/frame/truncated-by-capture"]
+    assert case.verdict is Verdict.INCONCLUSIVE and "snaplen cut the datagram" in case.checks[1].detail
+    assert result.exit_code() == 2  # nothing could be judged
+
+
+def test_other_traffic_is_counted_apart():
+    outside = bytearray(frame("Heartbeat", src=VEHICLE, dst=STATION))
+    struct.pack_into("<H", outside, 2, 350)  # EstimatedState: a message outside the suite
+    outside[-2:] = struct.pack("<H", __import__("imc_conformance.suites.imc.crc16", fromlist=["crc16"]).crc16(
+        bytes(outside[:-2])))
+    buf = pcap([(0, udp(HEARTBEAT)), (1, udp(b"not imc")), (2, udp(bytes(outside))),
+                (3, udp(HEARTBEAT, dst=("10.0.0.30", 9999), src=("10.0.0.1", 9998))),
+                (4, Ether(type=0x0806).build() + bytes(28))])
+    result = judge(buf)
+    assert result.notes[1].startswith("1 frames of 1 messages the suite does not cover (framing checked only): id 350 (1)")
+    assert "1 not judged: datagrams on the ports that are not frames of the suite" in result.notes
+    assert "1 not judged: UDP on other ports" in result.notes
+    assert "1 not judged: not IP" in result.notes
+
+
+# ---------------------------------------------------------------- frames: the corpus's rules
+
+def corpus_frames():
+    _, everything = open_corpus("imc")
+    for case in everything:
+        if case.kind == "vector" and expectation(case.data, EDITION) and "frames" in case.data:
+            for order, hexed in case.data["frames"].items():
+                yield case, order, bytes.fromhex(hexed)
+
+
+def test_every_corpus_frame_gets_the_corpus_verdict_rule_and_offset():
+    """Valid and acceptable frames are valid; an invalid one breaks its vector's rule at the codec's offset.
+    Two differences are the capture's by design: a datagram without IMC's synchronization number (wrong, or
+    fewer than 2 bytes) is not counted as IMC, and a frame of an id the definitions lack is a message outside the suite (DUNE sends hundreds)."""
+    items, expected = [], {}
+    for case, order, data in corpus_frames():
+        if len(data) > 65000:
+            continue  # one UDP datagram carries 65,507 bytes
+        items.append((len(items) / 1000, udp(data)))
+        expected[len(items)] = case, data
+    result = judge(pcap(items), listed=100000)
+    seen = {}
+    for c in result.cases:
+        for check in c.checks:
+            if check.check.startswith("frame ") and "/frame/" in c.id:
+                seen[int(check.check.split()[1])] = (c, check)
+    judged_valid = sum(int(c.checks[0].detail.split()[0].replace(",", "")) for c in result.cases
+                       if c.id.endswith("/frame/valid"))
+    not_imc = outside = 0
+    for n, (case, data) in expected.items():
+        rule = case.data.get("rule") if expectation(case.data, EDITION) == "invalid" else None
+        if rule is None:
+            assert n not in seen, case.id
+        elif rule == "sync" or len(data) < 2:  # no synchronization number
+            not_imc += 1
+        elif rule == "unknown-id" and n not in seen:
+            outside += 1
+        else:
+            c, check = seen[n]
+            assert c.rule == rule, (case.id, c.id)
+            try:
+                codec.decode(DEFS, bytes.fromhex(check.actual))
+            except Exception as exc:  # the codec's offset and wording
+                assert f"byte {exc.offset}: {exc.detail}" in check.detail, case.id
+    assert judged_valid == sum(1 for n in expected if n not in seen) - not_imc - outside
+    assert f"{not_imc} not judged: datagrams on the ports that are not frames of the suite" in result.notes
+    assert not_imc > 50 and outside > 50 and judged_valid > 1500
+
+
+# ---------------------------------------------------------------- exchanges
+
+def exchange(*frames_at, end: float | None = None):
+    """Judge (seconds, sender, frame) items; a last Heartbeat at ``end`` sets where the capture ends."""
+    items = [(t, udp(data, *((("10.0.0.30", 6002), ("10.0.0.1", 6001)) if sender == VEHICLE else ())))
+             for t, sender, data in frames_at]
+    if end is not None:
+        items.append((end, udp(HEARTBEAT)))
+    return cases(judge(pcap(items)))
+
+
+def request(req_id=7, src=STATION, dst=VEHICLE):
+    return frame("AcousticRequest", {"req_id": req_id, "destination": "p", "timeout": 10.0, "range": 0.0,
+                                     "type": named("AcousticRequest", "type", "MSG"), "msg": None}, src, dst)
+
+
+def status(name: str, req_id=7, dst=STATION, src=VEHICLE, type_="MSG"):
+    return frame("AcousticStatus", {"req_id": req_id, "type": named("AcousticStatus", "type", type_),
+                                    "status": named("AcousticStatus", "status", name), "info": "", "range": 0.0},
+                 src, dst)
+
+
+EX = "imc/AcousticRequest/capture/exchange/acoustic-request"
+
+
+def test_a_well_behaved_exchange_passes():
+    got = exchange((0, STATION, request()), (0.5, VEHICLE, status("QUEUED")), (2, VEHICLE, status("SENT")), end=30)
+    assert {k: c.verdict for k, c in got.items() if "exchange" in k} == {
+        f"{EX}/answered": Verdict.PASS, f"{EX}/to-requester": Verdict.PASS, f"{EX}/terminal": Verdict.PASS}
+
+
+def test_an_unanswered_request_fails_with_its_frame_and_time():
+    got = exchange((0, STATION, request()), end=30)
+    case = got[f"{EX}/answered"]
+    assert case.verdict is Verdict.FAIL and case.checks[1].check == "frame 1"
+    assert "no AcousticStatus within 20 s" in case.checks[1].detail and "at 0.000000 s" in case.checks[1].detail
+
+
+def test_a_capture_ending_before_the_bound_is_inconclusive():
+    assert exchange((0, STATION, request()), end=3)[f"{EX}/answered"].verdict is Verdict.INCONCLUSIVE
+
+
+def test_a_req_id_not_echoed_fails_at_the_reply():
+    got = exchange((0, STATION, request(7)), (1, VEHICLE, status("SENT", req_id=8)), end=30)
+    case = got[f"{EX}/echo-req_id"]
+    assert case.verdict is Verdict.FAIL and case.checks[1].check == "frame 2"
+    assert "no AcousticStatus echoed req_id=7 within 20 s; this one carries req_id=8" in case.checks[1].detail
+
+
+def test_a_reply_whose_request_is_not_in_the_capture_is_not_judged():
+    got = exchange((1, VEHICLE, status("SENT", req_id=8)), end=30)
+    assert not [k for k in got if "exchange" in k]
+
+
+def test_a_status_after_the_terminal_one_fails():
+    got = exchange((0, STATION, request()), (1, VEHICLE, status("SENT")), (2, VEHICLE, status("QUEUED")), end=30)
+    case = got[f"{EX}/after-terminal"]
+    assert case.verdict is Verdict.FAIL and "status=QUEUED after the terminal state (frame 2)" in case.checks[1].detail
+
+
+def test_a_reply_to_another_system_fails():
+    got = exchange((0, STATION, request()), (1, VEHICLE, status("SENT", dst=0xFFFF)), end=30)
+    case = got[f"{EX}/to-requester"]
+    assert case.verdict is Verdict.FAIL and "sent to system 65535, not to the requester 19696" in case.checks[1].detail
+
+
+def test_a_late_reply_and_a_sequence_without_end_fail():
+    got = exchange((0, STATION, request()), (25, VEHICLE, status("QUEUED")), end=80)
+    assert "no AcousticStatus within 20 s" in got[f"{EX}/answered"].checks[1].detail
+    got = exchange((0, STATION, request()), (1, VEHICLE, status("QUEUED")), end=80)
+    assert got[f"{EX}/terminal"].verdict is Verdict.FAIL
+    assert "no terminal AcousticStatus within 20 s" in got[f"{EX}/terminal"].checks[1].detail
+
+
+def test_a_resent_request_is_one_exchange_and_a_should_is_non_strict():
+    got = exchange((0, STATION, request()), (1, STATION, request()), (2, VEHICLE, status("SENT")), end=30)
+    assert got[f"{EX}/answered"].checks[0].detail.startswith("1 exchange ")
+    tx = frame("IridiumMsgTx", {"req_id": 3, "ttl": 60, "destination": "", "data": ""})
+    reply = frame("IridiumTxStatus", {"req_id": 3, "status": named("IridiumTxStatus", "status", "OK"), "text": ""},
+                  VEHICLE, 0x1234)
+    got = exchange((0, STATION, tx), (1, VEHICLE, reply), end=90)
+    case = got["imc/IridiumMsgTx/capture/exchange/iridium-transmission/to-requester"]
+    assert case.verdict is Verdict.NON_STRICT  # to-requester is a SHOULD for Iridium (imc-wire.md)
+
+
+# ---------------------------------------------------------------- the command
+
+def run(*argv, capsys=None):
+    code = main(["pcap", *map(str, argv)])
+    out = capsys.readouterr() if capsys else None
+    return code, out
+
+
+def test_generated_traffic_passes_clean_and_damage_is_found(tmp_path, capsys):
+    info = write_capture(tmp_path / "clean.pcap", DEFS, SUITE.wire, EDITION, 3000, damaged=0.0)
+    code, out = run(tmp_path / "clean.pcap", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = json.loads((tmp_path / "r.json").read_text())
+    verdicts = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    assert info == {"frames": 3000, "damaged": 0}
+    assert {v for k, v in verdicts.items() if not k.endswith("/answered")} == {"PASS"}
+    assert code == 0, out.out
+    info = write_capture(tmp_path / "noisy.pcap", DEFS, SUITE.wire, EDITION, 3000, damaged=0.05)
+    code, out = run(tmp_path / "noisy.pcap", "--message", "LblRange", "--list-frames", "2", "--json", tmp_path / "n.json",
+                    capsys=capsys)
+    doc = json.loads((tmp_path / "n.json").read_text())
+    assert code == 1 and [m["name"] for m in doc["messages"]] == ["LblRange"]
+    failing = [c for c in doc["messages"][0]["cases"] if c["verdict"] == "FAIL"]
+    assert failing and all(len([k for k in c["checks"] if k["check"].startswith("frame ")]) <= 2 for c in failing)
+    assert any(k["check"] == "more" for c in failing for k in c["checks"])
+
+
+def test_filters_by_address_and_time(tmp_path, capsys):
+    write_capture(tmp_path / "c.pcap", DEFS, SUITE.wire, EDITION, 1000, damaged=0.0)
+    for argv, frames in [(["--src", "10.0.0.30"], None), (["--host", "0x4cf0"], None),
+                         (["--start", "10", "--end", "19.99"], None)]:
+        code, _ = run(tmp_path / "c.pcap", *argv, "--json", tmp_path / "r.json", capsys=capsys)
+        doc = json.loads((tmp_path / "r.json").read_text())
+        notes = " ".join(doc["notes"])
+        assert "not judged: outside the selection" in notes, argv
+    doc = json.loads((tmp_path / "r.json").read_text())
+    heartbeats = next(m for m in doc["messages"] if m["name"] == "Heartbeat")["cases"][0]["checks"][0]["detail"]
+    assert heartbeats.startswith("10 frames")  # one a second, seconds 10 to 19
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"", "empty file, not a capture"),
+    (b"hello world, not a capture", "not a pcap or pcapng capture (it starts 68656c6c)"),
+    (PCAP_HEADER[:10], "a truncated pcap header (10 of 24 bytes)"),
+    (PCAP_HEADER + b"\x00" * 20, "record 1 claims 0 bytes"),
+])
+def test_a_file_that_is_not_a_capture_is_one_line(tmp_path, capsys, content, message):
+    path = tmp_path / "x.pcap"
+    path.write_bytes(content)
+    code, out = run(path, capsys=capsys)
+    if message.startswith("record 1 claims"):
+        assert code == 2  # a record of 0 bytes is read: nothing in it to judge
+        return
+    assert code == 2 and out.err.count("\n") == 1 and message in out.err and "Traceback" not in out.err
+
+
+def test_a_truncated_capture_judges_the_frames_before_the_damage(tmp_path, capsys):
+    buf = pcap([(0, udp(HEARTBEAT)), (1, udp(HEARTBEAT)), (2, udp(HEARTBEAT))])
+    (tmp_path / "t.pcap").write_bytes(buf[:-10])
+    code, out = run(tmp_path / "t.pcap", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert code == 2 and "record 3 is truncated" in out.err and "Traceback" not in out.err
+    assert doc["messages"][0]["cases"][0]["checks"][0]["detail"].startswith("2 frames")
+    assert any("record 3 is truncated" in n for n in doc["notes"])
+
+
+def test_a_link_type_not_read_is_one_line(tmp_path, capsys):
+    (tmp_path / "c.pcap").write_bytes(pcap([(0, b"\x00" * 40)], linktype=147))
+    code, out = run(tmp_path / "c.pcap", capsys=capsys)
+    assert code == 2 and "link type 147: not Ethernet, raw IP, Linux cooked capture or BSD loopback" in out.err
+    assert out.err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["missing.pcap"], "cannot read missing.pcap"),
+    ([".", ], "cannot read ."),
+    (["c.pcap", "--message", "Nope"], "unknown message(s): Nope"),
+    (["c.pcap", "--suite", "ros_acomms"], "is not carried in datagrams"),
+    (["c.pcap", "--start", "5", "--end", "1"], "--end 1 is before --start 5"),
+])
+def test_mistaken_options_are_one_line(tmp_path, capsys, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "c.pcap").write_bytes(pcap([(0, udp(HEARTBEAT))]))
+    code, out = run(*argv, capsys=capsys)
+    assert code == 2 and message in out.err and out.err.count("\n") == 1
+
+
+def test_damaged_pcapng_blocks_are_errors_not_tracebacks():
+    with pytest.raises(CaptureError, match="truncated or damaged"):
+        list(records(b"\x0a\x0d\x0d\x0a" + struct.pack("<I", 9999) + b"\x4d\x3c\x2b\x1a" + bytes(20)))
