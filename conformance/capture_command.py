@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 from .capture.judge import CaptureJudge, Selection
+from .capture.recording import read_about
 from .capture.records import CaptureError, records
 
 
@@ -110,6 +111,12 @@ def command_pcap(args) -> int:
     result = judge.result(implementation=", ".join(Path(p).name for p in args.files), started=started,
                           duration=round(time.perf_counter() - began, 3), strict=args.strict, title=suite.title,
                           notes=damage, complete=complete)
+    if judge.about is not None and complete:
+        try:
+            merge(result, replay(judge.about, judge.commented, args.strict), list(rules.keys), args.strict)
+        except ValueError as exc:
+            damage.append(f"the recorded run cannot be replayed: {exc}")
+            result.notes.append(damage[-1])
     console = terminal()
     print_result(result, console)
     problems = write_reports(result, targets, console)
@@ -131,8 +138,12 @@ def judge_file(judge: CaptureJudge, path: Path, named: bool) -> list[str]:
                 raise UsageError(f"{path}: empty file, not a capture")
             with mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as buf:
                 source = f"{path.name} " if named else ""
+                sections: list[str] = []
                 try:
-                    for record in records(buf):
+                    for record in records(buf, sections):
+                        if sections and judge.about is None and not named:
+                            judge.about = read_about(sections)  # a recorded run (run --pcap): replay it too
+                            judge.keep_commented = judge.about is not None
                         judge.feed(record, source)
                 except CaptureError as exc:
                     if not judge.records:
@@ -140,6 +151,62 @@ def judge_file(judge: CaptureJudge, path: Path, named: bool) -> list[str]:
                     return [f"{path}: {exc}; the records before it are judged"]
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from exc
-    except ValueError as exc:  # mmap of something that is not a regular file
+    except ValueError as exc:  # mmap of something that is not a regular file, a damaged run description
         raise UsageError(f"cannot read {path}: {exc}") from exc
     return []
+
+
+def replay(about: dict, datagrams: list, strict: bool):
+    """The scenario verdicts of a recorded run, its engine replayed over the recorded datagrams on virtual time
+    (robustness excluded: its restarts and floods cannot be replayed); ValueError if the recording cannot be."""
+    from .core.runner import run_cases
+    from .files import open_corpus
+    from .sessions.replay import Recorded, ReplayLink
+    from .suites import load_suite
+
+    try:
+        load_suite(about["suite"])
+        suite, everything = open_corpus(about["suite"], None)
+        wanted = set(about["cases"])
+        cases = [c for c in everything if c.id in wanted and c.kind == "scenario"]
+        options = {"params": dict(about["params"]), "effects": set(about["effects"]),
+                   "time_scale": float(about["time_scale"]), "profile": suite.profile(about["profile"]),
+                   "robustness": False, "restart": False, "replay_effects": False,
+                   "corpus": tuple(c for c in everything if c.kind == "vector")}
+        if about["claims"] is not None:
+            options["claims"] = set(about["claims"])
+        settings = {"target": str(about["target"]), "src": about["src"], "dst": about["dst"],
+                    "startup": float(about["startup"])}
+        edition = about["edition"]
+    except (KeyError, TypeError, LookupError) as exc:
+        raise ValueError(f"the recorded run's description is damaged ({type(exc).__name__}: {exc})") from None
+    if edition not in suite.editions:
+        raise ValueError(f"the recorded run's edition {edition!r} is not one of the suite's")
+    if not datagrams:
+        raise ValueError("no datagram of the run is in the capture")
+    t0 = datagrams[0].time
+    recording = [Recorded(d.time - t0, (d.src, d.sport), (d.dst, d.dport), d.payload, d.comment) for d in datagrams]
+    sent = next((r for r in recording if r.comment not in ("received", "the session's own")), recording[0])
+    link = ReplayLink(recording, target=sent.dst, address=sent.src, epoch0=t0)
+    session = suite.open_replay(link, **settings)
+    return run_cases(session, suite, cases, edition=edition, adapter=settings["target"], strict=strict,
+                     options=options, clock=link.now, started=_iso(t0))
+
+
+def merge(result, replayed, order: list[str], strict: bool) -> None:
+    """Add a replay's scenario cases to a capture's result, each under its message."""
+    from .core.results import MessageResult, message_verdict
+
+    groups = {m.name: m.cases for m in result.messages}
+    for m in replayed.messages:
+        groups.setdefault(m.name, []).extend(m.cases)
+    rank = {name: i for i, name in enumerate(order)}
+    keys = {m.name: m.key for m in result.messages + replayed.messages}
+    result.messages = [MessageResult(name, keys[name], message_verdict(cases, strict), cases)
+                       for name, cases in sorted(groups.items(), key=lambda kv: (rank.get(kv[0], len(rank)), kv[0]))]
+    result.notes += [f"scenarios replayed: {len(replayed.cases)} from the recorded run "
+                     f"({replayed.implementation})"] + replayed.notes
+
+
+def _iso(t: float) -> str:
+    return dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(timespec="seconds")

@@ -167,8 +167,9 @@ def command_run(args) -> int:
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
     console = terminal()
+    recorder = open_recording(args, suite, cases, options)
     try:
-        session = live.open_target(args, suite) if args.target else open_session(name, argv, args, suite)
+        session = live.open_target(args, suite, recorder) if args.target else open_session(name, argv, args, suite)
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
     try:
@@ -182,7 +183,12 @@ def command_run(args) -> int:
         raise UsageError(str(exc)) from exc
     finally:
         session.close()
+        if recorder is not None:
+            recorder.close()
     print_result(result, console)
+    if recorder is not None:
+        console.print(f"pcapng of the exchange ({recorder.count} datagrams): {printable(str(args.pcap))}",
+                      highlight=False, markup=False)
     problems = write_reports(result, targets, console)
     if args.write_waivers:
         from .core.waivers import waivers_document
@@ -194,6 +200,23 @@ def command_run(args) -> int:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     return 2 if problems else result.exit_code()
+
+
+def open_recording(args, suite, cases, options):
+    """The recorder of ``--pcap`` (a live run's datagrams as pcapng), or None."""
+    if not args.pcap:
+        return None
+    if not args.target:
+        raise UsageError("--pcap records a live run's datagrams: give --target udp://HOST:PORT")
+    from .capture.recording import Recorder, about_run
+
+    ids = [c.id for c in cases if c.kind == "scenario"]
+    about = about_run(suite.name, args.edition, ids, options, args.target, args.src, args.dst, args.startup)
+    try:
+        Path(args.pcap).parent.mkdir(parents=True, exist_ok=True)
+        return Recorder(Path(args.pcap), about)
+    except OSError as exc:
+        raise UsageError(f"cannot write the pcapng to {args.pcap}: {exc.strerror or exc}") from exc
 
 
 def report_targets(args) -> dict[str, Path]:
@@ -348,6 +371,8 @@ def build_parser() -> argparse.ArgumentParser:
     live_group.add_argument("--profile", metavar="NAME", help="where deployed practice differs from the seeds (default seed)")
     live_group.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
                       help="multiply every time bound by F (slow links)")
+    live_group.add_argument("--pcap", metavar="FILE", help="write every datagram of the run as pcapng, each commented "
+                                                           "with its scenario and step (imc-conformance pcap replays it)")
     live_group.add_argument("--dry-run", action="store_true", help="print what the scenarios would send, and send nothing")
     live_group.add_argument("--robustness", action="store_true",
                             help="also run the robustness phase: every corpus frame, then 10,000 garbage datagrams, "

@@ -143,11 +143,12 @@ def list_live_cases(suite, cases) -> int:
     return 0
 
 
-def open_target(args, suite):
-    """The session with ``--target``; ValueError with a one-line reason."""
+def open_target(args, suite, recorder=None):
+    """The session with ``--target`` (its datagrams told to ``recorder``); ValueError with a one-line reason."""
     restart = restarter(restart_argv(args.restart_cmd)) if args.restart_cmd is not None else None
     return suite.open_target(args.target, bind=args.bind, src=args.src, dst=args.dst,
-                             allow_group=args.allow_multicast, startup=args.startup, restart=restart)
+                             allow_group=args.allow_multicast, startup=args.startup, restart=restart,
+                             recorder=recorder)
 
 
 def restart_argv(text: str) -> list[str]:

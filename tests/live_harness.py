@@ -19,7 +19,8 @@ def scenario_cases(cases, ids=None, kinds=("scenario",)):
     return [c for c in cases if c.kind in kinds and (ids is None or c.id in ids)]
 
 
-def virtual_session(suite, edition: str, node=None, restartable: bool = False, restarted=None, **node_options):
+def virtual_session(suite, edition: str, node=None, restartable: bool = False, restarted=None, recorder=None,
+                    **node_options):
     """A session with a node on virtual time; ``restartable``: the session may restart it (a fresh node made
     with the same options, passed through ``restarted`` if given), as --restart-cmd lets it restart a real one."""
     def fresh():
@@ -37,15 +38,17 @@ def virtual_session(suite, edition: str, node=None, restartable: bool = False, r
         return None
 
     link.restarts = 0
-    return DatagramSession(link, peer, suite.wire, hello, startup=10.0, restart=restart if restartable else None), link
+    return DatagramSession(link, peer, suite.wire, hello, startup=10.0, restart=restart if restartable else None,
+                           recorder=recorder), link
 
 
 def run_virtual(suite, cases, edition=None, options=None, strict=False, kinds=("scenario",), restartable=False,
-                restarted=None, **node_options):
+                restarted=None, recorder=None, **node_options):
     """The result of the live cases of ``kinds`` among ``cases`` against a node made with ``node_options``, and
     its link. The robustness phase replays the vector cases among ``cases``."""
     edition = edition or suite.editions[0]
-    session, link = virtual_session(suite, edition, restartable=restartable, restarted=restarted, **node_options)
+    session, link = virtual_session(suite, edition, restartable=restartable, restarted=restarted, recorder=recorder,
+                                    **node_options)
     options = dict(EVERYTHING if options is None else options)
     options.setdefault("corpus", tuple(c for c in cases if c.kind == "vector"))
     options.setdefault("robustness", "robustness" in kinds)

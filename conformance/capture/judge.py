@@ -16,6 +16,7 @@ from .findings import CaptureRules, Finding, Watched
 from .records import Record
 
 FRAME_CLAUSE = "the byte rules of the suite's corpus (rules.json)"
+RECENT = 256  # watched frames remembered to recognise a datagram the network duplicated
 
 
 @dataclass
@@ -56,6 +57,12 @@ class CaptureJudge:
         self.last: float = 0.0
         self.records = self.datagrams = 0
         self.valid: dict[str, list[int]] = {}  # group -> [valid frames, first, last]
+        self.source = ""  # the file being judged, when there are several
+        self.recent: dict[bytes, None] = {}  # the last watched frames, oldest first, to tell duplicates
+        self.duplicates = 0
+        self.about: dict | None = None  # the recorded run the capture holds (run --pcap), if any
+        self.keep_commented = False  # keep the datagrams that carry a comment (a recorded run, to replay)
+        self.commented: list[Datagram] = []
         self.groups = selection.groups
         self.filtered = any(v is not None for v in (selection.src, selection.dst, selection.host, selection.start,
                                                     selection.end))
@@ -72,7 +79,11 @@ class CaptureJudge:
             self.skipped[got if not got.startswith("link type") else f"{describe_linktype(record.linktype)}: "
                          "not Ethernet, raw IP, Linux cooked capture or BSD loopback"] += 1
             return
-        if got.sport not in self.ports and got.dport not in self.ports:
+        self.source = source
+        recorded = got.comment is not None and self.keep_commented  # a datagram of a recorded run: on its ports
+        if recorded:
+            self.commented.append(got)
+        if not recorded and got.sport not in self.ports and got.dport not in self.ports:
             self.skipped["UDP on other ports"] += 1
             return
         if self.filtered and not self._selected(got):
@@ -90,7 +101,6 @@ class CaptureJudge:
         if self.filtered and not self._addressed(frame.src, frame.dst):
             self.skipped["outside the selection"] += 1
             return
-        got.comment = source or None  # the file, for the reports' frame lists
         if self.groups and group not in self.groups:
             self.skipped["outside the selection"] += 1
         elif got.cut:
@@ -108,6 +118,12 @@ class CaptureJudge:
                 valid[0] += 1
                 valid[2] = got.number
         if frame.fields is not None and frame.rule is None and not got.cut:
+            if got.payload in self.recent:  # the network duplicated it: one frame for the exchanges
+                self.duplicates += 1
+                return
+            self.recent[got.payload] = None
+            if len(self.recent) > RECENT:
+                del self.recent[next(iter(self.recent))]
             for finding in self.tracker.observe(Watched(got.number, got.time, group, frame.fields,
                                                         frame.src, frame.dst, got)):
                 if not self.groups or finding.group in self.groups:
@@ -140,6 +156,9 @@ class CaptureJudge:
             out.append(f"{sum(self.outside.values()):,} frames of {len(self.outside)} messages the suite does not "
                        f"cover (framing checked only): {top}{' ...' if len(self.outside) > 8 else ''}")
         out += [f"{n:,} not judged: {why}" for why, n in self.skipped.most_common()]
+        if self.duplicates:
+            out.append(f"{self.duplicates:,} datagrams identical to one shortly before (duplicated by the network) "
+                       "were judged once by the exchange rules")
         if self.dissector.held or self.dissector.given_up:
             out.append(f"{len(self.dissector.held) + self.dissector.given_up:,} IP datagrams never reassembled "
                        "(fragments missing from the capture)")
@@ -156,7 +175,7 @@ class CaptureJudge:
             tally.first = f.number if tally.first is None else tally.first
             tally.last = f.number
         if f.verdict is not Verdict.PASS and len(tally.listed) < self.selection.listed:
-            f.where = _place(f.where)
+            f.where = _place(f.where, self.source)
             tally.listed.append(f)
             tally.clause = f.clause
 
@@ -196,10 +215,10 @@ class CaptureJudge:
         return True
 
 
-def _place(d: Datagram) -> str:
+def _place(d: Datagram, source: str) -> str:
     """Where a datagram went: ``[file ]src:port → dst:port``."""
     host = lambda a: f"[{a}]" if ":" in a else a  # noqa: E731
-    return f"{d.comment + ' ' if d.comment else ''}{host(d.src)}:{d.sport} → {host(d.dst)}:{d.dport}"
+    return f"{source}{host(d.src)}:{d.sport} → {host(d.dst)}:{d.dport}"
 
 
 def _when(t: float) -> str:

@@ -31,13 +31,14 @@ class Record:
     comment: str | None = None  # pcapng opt_comment
 
 
-def records(buf) -> Iterator[Record]:
-    """Every record of the capture in ``buf``; raises CaptureError at the first damage."""
+def records(buf, sections: list[str] | None = None) -> Iterator[Record]:
+    """Every record of the capture in ``buf``; raises CaptureError at the first damage. A pcapng section's
+    comments are appended to ``sections`` as they are read."""
     head = bytes(buf[:4])
     if head in PCAP_MAGICS:
         return _pcap(buf, *PCAP_MAGICS[head])
     if head == PCAPNG_SHB:
-        return _pcapng(buf)
+        return _pcapng(buf, [] if sections is None else sections)
     if len(buf) < 4:
         raise CaptureError(f"not a capture: {len(buf)} bytes")
     raise CaptureError(f"not a pcap or pcapng capture (it starts {head.hex()})")
@@ -62,7 +63,7 @@ def _pcap(buf, e: str, unit: float) -> Iterator[Record]:
         pos += caplen
 
 
-def _pcapng(buf) -> Iterator[Record]:
+def _pcapng(buf, sections: list[str]) -> Iterator[Record]:
     end, pos, number = len(buf), 0, 0
     e, interfaces = "<", []
     while pos < end:
@@ -80,7 +81,9 @@ def _pcapng(buf) -> Iterator[Record]:
             raise CaptureError(f"a pcapng block at byte {pos} is truncated or damaged (length {blen})")
         body = buf[pos + 8:pos + blen - 4]
         pos += blen
-        if btype == 1:  # interface description
+        if btype == 0x0A0D0D0A:
+            sections += [value.decode("utf-8", "replace") for code, value in _options(body, 16, e) if code == 1]
+        elif btype == 1:  # interface description
             interfaces.append(_interface(body, e))
         elif btype in (6, 3, 2):  # enhanced, simple, obsolete packet
             number += 1

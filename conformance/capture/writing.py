@@ -24,3 +24,38 @@ def ethernet_udp(src: str, sport: int, dst: str, dport: int, payload: bytes, ide
 def pcap_record(t: float, frame: bytes) -> bytes:
     seconds = int(t)
     return struct.pack("<IIII", seconds, round((t - seconds) * 1e6) % 1000000, len(frame), len(frame)) + frame
+
+
+def ip_udp(src: str, sport: int, dst: str, dport: int, payload: bytes) -> bytes:
+    """One IPv4 or IPv6 UDP datagram as it was on the wire (checksums left 0: "not computed")."""
+    udp = struct.pack("!HHHH", sport, dport, 8 + len(payload), 0) + payload
+    if ":" in src:
+        return struct.pack("!IHBB16s16s", 6 << 28, len(udp), 17, 64, socket.inet_pton(socket.AF_INET6, src),
+                           socket.inet_pton(socket.AF_INET6, dst)) + udp
+    return ethernet_udp(src, sport, dst, dport, payload)[14:]
+
+
+class PcapNgWriter:
+    """A pcapng file of raw IP datagrams (link type 101) with nanosecond timestamps, a comment on the section
+    (``about``) and one on every packet. Hand-written: scapy's writer cannot comment the section header."""
+
+    def __init__(self, handle, about: str):
+        self.handle = handle
+        handle.write(_block(0x0A0D0D0A, struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1) + _options([(1, about.encode())])))
+        handle.write(_block(1, struct.pack("<HHI", 101, 0, 0) + _options([(9, b"\x09")])))
+
+    def write(self, epoch: float, src: tuple, dst: tuple, payload: bytes, comment: str) -> None:
+        packet = ip_udp(src[0], src[1], dst[0], dst[1], payload)
+        ns = round(epoch * 1e9)
+        body = struct.pack("<IIIII", 0, ns >> 32, ns & 0xFFFFFFFF, len(packet), len(packet))
+        self.handle.write(_block(6, body + packet + bytes(-len(packet) % 4) + _options([(1, comment.encode())])))
+
+
+def _options(items) -> bytes:
+    out = b"".join(struct.pack("<HH", code, len(value)) + value + bytes(-len(value) % 4) for code, value in items)
+    return out + struct.pack("<HH", 0, 0)
+
+
+def _block(kind: int, body: bytes) -> bytes:
+    length = 12 + len(body)
+    return struct.pack("<II", kind, length) + body + struct.pack("<I", length)

@@ -117,12 +117,17 @@ class Suite(ABC):
     def open_target(self, target: str, **settings):
         """A session with a live target (``--target``), for the suite's scenarios; ValueError with a one-line
         reason if it cannot be opened. Settings: ``bind``, ``src``, ``dst``, ``allow_group``, ``startup``,
-        ``restart`` (a function restarting the target, or None)."""
+        ``restart`` (a function restarting the target, or None), ``recorder`` (told of every datagram, or None)."""
         raise ValueError(f"the suite {self.name!r} has no live targets")
 
     def capture_rules(self):
         """What the suite judges in captures (``capture.findings.CaptureRules``); ValueError if it has none."""
         raise ValueError(f"the suite {self.name!r} is not carried in datagrams: it has no captures to judge")
+
+    def open_replay(self, link, **settings):
+        """A session replaying a recorded run over ``link`` (sessions/replay.py); settings as the run had them:
+        ``target``, ``src``, ``dst``, ``startup``."""
+        raise ValueError(f"the suite {self.name!r} has no live targets to replay")
 
     def profile(self, name: str) -> dict:
         """The profile ``name`` of the suite's scenarios (``profiles/<name>.json``); ValueError if unknown."""

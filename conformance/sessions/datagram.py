@@ -15,6 +15,9 @@ from ..kinds.scenario import Addressing, Conductor
 
 
 class Transport(Protocol):
+    target: tuple  # the target's address
+    address: tuple  # the session's own
+
     def now(self) -> float: ...
 
     def epoch(self, t: float) -> float:
@@ -54,11 +57,13 @@ class DatagramSession:
     incidents: tuple = ()
     stderr = ""
 
-    def __init__(self, transport: Transport, peer: Peer, wire, hello: dict, startup: float, restart=None):
+    def __init__(self, transport: Transport, peer: Peer, wire, hello: dict, startup: float, restart=None,
+                 recorder=None):
         """``startup``: seconds to wait for the target to show itself before every scenario is INCONCLUSIVE;
-        ``restart()``: restarts the target (None, or why it could not), for the robustness phase to bisect."""
+        ``restart()``: restarts the target (None, or why it could not), for the robustness phase to bisect;
+        ``recorder.record(epoch, src, dst, data, comment)`` is told of every datagram sent and received."""
         self.transport, self.peer, self.wire, self._hello, self.startup = transport, peer, wire, hello, startup
-        self.restart = restart
+        self.restart, self.recorder = restart, recorder
         self.name = hello["implementation"]
         self.heard = 0  # valid frames from the target
         self.unsent: list[str] = []  # why the session's own datagrams (announce, heartbeat) could not be sent
@@ -116,6 +121,7 @@ class DatagramSession:
         t = self.transport.now()
         if got is not None:
             arrived, data, source = got
+            self._record(arrived, tuple(source), tuple(self.transport.address[:2]), data, "received")
             parsed = self.wire.parse(data)
             self.heard += parsed.decoded is not None
             self.peer.observe(arrived, parsed, tuple(source) == tuple(self.transport.target[:2]))
@@ -127,15 +133,23 @@ class DatagramSession:
 
     def _transmit(self, outgoing) -> None:
         for item in list(outgoing):
+            self._record(self.transport.now(), tuple(self.transport.address[:2]), tuple(self.transport.target[:2]),
+                         item.composed.data, f"{item.job.case_id} {item.composed.extra.get('step', '')}".rstrip())
             why = self.transport.send(item.composed.data)
             if why:  # the scenario cannot go on; the node is not to blame
                 self._transmit(self.conductor.undeliverable(self.transport.now(), item.job, why))
 
     def _send(self, datagrams) -> None:
         for address, data in datagrams:
+            self._record(self.transport.now(), tuple(self.transport.address[:2]),
+                         tuple((address or self.transport.target)[:2]), data, "the session's own")
             why = self.transport.send(data, address)
             if why and why not in self.unsent:
                 self.unsent.append(why)
+
+    def _record(self, t: float, src: tuple, dst: tuple, data: bytes, comment: str) -> None:
+        if self.recorder is not None:
+            self.recorder.record(self.transport.epoch(t), src, dst, data, comment)
 
     @property
     def notes(self) -> list[str]:

@@ -32,6 +32,10 @@ class VirtualLink:
     def target(self) -> tuple:
         return self.node_address
 
+    @property
+    def address(self) -> tuple:
+        return self.own_address
+
     def receive(self, until: float) -> tuple[float, bytes, tuple] | None:
         while not self.inbox:
             deadline = self.node.deadline

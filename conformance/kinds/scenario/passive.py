@@ -58,6 +58,7 @@ class PassiveExchanges:
         self.open: dict[int, deque[_Open]] = {id(r): deque() for r in self.rules}  # in deadline order
         self.ended: dict[int, deque[_Open]] = {id(r): deque() for r in self.rules}  # answered, kept one more bound
         self.keyed: dict[tuple, list[_Open]] = {}
+        self.pairs: set[tuple] = set()  # (rule, requester, node) of every request seen
         self.next_deadline = float("inf")
 
     @property
@@ -67,20 +68,31 @@ class PassiveExchanges:
 
     def observe(self, w: Watched) -> list[Finding]:
         out = self._expire(w.time) if w.time > self.next_deadline else []
+        answers = False  # a frame that answers an open request is not a new request (CLEAR answers CLEAR)
         for rule in self.by_reply.get(w.message, ()):
             if _matches(w.fields, rule.reply_when):
-                out += self._reply(rule, w)
-        for rule in self.by_request.get(w.message, ()):
-            if _matches(w.fields, rule.when):
+                found = self._reply(rule, w)
+                answers = answers or found is not None
+                out += found or []
+        for rule in () if answers else self.by_request.get(w.message, ()):
+            if _matches(w.fields, rule.when) and not self._replying(w):
                 self._request(rule, w)
                 break
         return out
+
+    def _replying(self, w: Watched) -> bool:
+        """Whether ``w`` goes back the way a request of its kind came (a late reply, when request and reply are
+        the same message), so it is no new request."""
+        return any(_matches(w.fields, rule.reply_when) and (id(rule), w.dst, w.src) in self.pairs
+                   for rule in self.by_reply.get(w.message, ()))
 
     def finish(self, end: float) -> list[Finding]:
         """Judge what the end of the capture decides; a request whose bound reaches past it is INCONCLUSIVE."""
         out = self._expire(end)
         for o in (o for queue in self.open.values() for o in queue):
-            if not o.answered:
+            if not o.answered and o.orphans:  # a reply came, echoing another value: that is decided
+                out += self._judge_expired(o)
+            elif not o.answered:
                 out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
                                          f"the capture ends {end - o.request.time:.3f} s after the request, before "
                                          f"its bound of {o.deadline - o.request.time:g} s", o.request))
@@ -95,13 +107,15 @@ class PassiveExchanges:
                for o in same_key):
             return  # a resend of an open request is the same exchange
         o = _Open(rule, w, key, w.time + rule.within)
+        self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
         self.open[id(rule)].append(o)
         self.next_deadline = min(self.next_deadline, o.deadline)
 
     # ------------------------------------------------------------ replies
 
-    def _reply(self, rule: _Rule, w: Watched) -> list[Finding]:
+    def _reply(self, rule: _Rule, w: Watched) -> list[Finding] | None:
+        """The findings on a reply to an open request; None if it answers none."""
         if rule.echoes:
             key = tuple(hashable(w.fields.get(e["reply_field"])) for e in rule.echoes)
             mine = self.keyed.get((id(rule), key), ())
@@ -115,7 +129,7 @@ class PassiveExchanges:
                 for other in self.open[id(rule)]:
                     if not other.answered and other.request.src == w.dst and self._from_node(other, w):
                         other.orphans.append(w)
-            return []
+            return None
         ex, out = rule.exchange, []
         for c in ex["correlation"]:
             if c["kind"] == "to-requester":
@@ -165,11 +179,15 @@ class PassiveExchanges:
         if not o.answered:
             self.keyed[(id(o.rule), o.key)].remove(o)
             if o.orphans and o.rule.echoes:
-                e, w = o.rule.echoes[0], o.orphans[0]
+                w = o.orphans[0]
+                e = next((e for e in o.rule.echoes if not same(w.fields.get(e["reply_field"]),
+                                                                o.request.fields.get(e["request_field"]))),
+                         o.rule.echoes[0])
+                asked = self._name(o.request.message, e["request_field"], o.request.fields.get(e["request_field"]))
+                echoed = self._name(w.message, e["reply_field"], w.fields.get(e["reply_field"]))
                 return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
-                                      f"no {ex['reply']} echoed {e['request_field']}="
-                                      f"{show(o.request.fields.get(e['request_field']))} within {bound:g} s; this one "
-                                      f"carries {e['reply_field']}={show(w.fields.get(e['reply_field']))}", w)]
+                                      f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
+                                      f"this one carries {e['reply_field']}={echoed}", w)]
             return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
                                   f"no {ex['reply']} within {bound:g} s", o.request)]
         self.ended[id(o.rule)].append(o)

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from ...sessions.datagram import DatagramSession
+from ...sessions.replay import ReplayLink
 from ...sessions.udp import UdpTransport, group_address, parse_endpoint, resolve, route_source
 from .peer import DEFAULT_SYSTEM, DISCOVERY_PORTS, ImcPeer
 
 
 def open_target(suite, target: str, *, bind: str | None = None, src: int | None = None, dst: int | None = None,
-                allow_group: bool = False, startup: float = 10.0, restart=None) -> DatagramSession:
+                allow_group: bool = False, startup: float = 10.0, restart=None, recorder=None) -> DatagramSession:
     """The session for ``target`` (``udp://HOST:PORT``, ``imc+udp://HOST:PORT/``); ValueError with a one-line
     reason for a malformed URL, a group address, a host that does not resolve or a bind that fails."""
     host, port = parse_endpoint(target, "--target")
@@ -30,4 +31,16 @@ def open_target(suite, target: str, *, bind: str | None = None, src: int | None 
                    service=f"imc+udp://{shown}:{own_port}/", host=address[0], epoch=transport.epoch)
     hello = {"implementation": f"IMC node at {target}", "suites": [suite.name], "byte_orders": list(suite.encodings),
              "kinds": ["scenario", "robustness"]}
-    return DatagramSession(transport, peer, suite.wire, hello, startup, restart)
+    return DatagramSession(transport, peer, suite.wire, hello, startup, restart, recorder)
+
+
+def open_replay(suite, link: ReplayLink, *, target: str, src: int | None, dst: int | None,
+                startup: float) -> DatagramSession:
+    """A session replaying a recorded run (``link``) on virtual time, with the recorded run's settings."""
+    host, port = link.address[:2]
+    shown = f"[{host}]" if ":" in host else host
+    peer = ImcPeer(suite.defs, system=DEFAULT_SYSTEM if src is None else src, node=dst,
+                   service=f"imc+udp://{shown}:{port}/", host=link.target[0], epoch=link.epoch)
+    hello = {"implementation": f"IMC node at {target} (replayed)", "suites": [suite.name],
+             "byte_orders": list(suite.encodings), "kinds": ["scenario"]}
+    return DatagramSession(link, peer, suite.wire, hello, startup, recorder=link)

@@ -128,6 +128,10 @@ class ImcSuite(DataSuite):
         from .live import open_target
         return open_target(self, target, **settings)
 
+    def open_replay(self, link, **settings):
+        from .live import open_replay
+        return open_replay(self, link, **settings)
+
 
 def shim_argv(script: str) -> list[str]:
     """The command line of one of the subprocess shims shipped in ``adapters/``."""
