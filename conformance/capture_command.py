@@ -72,12 +72,23 @@ def add_command(sub, add_suite, add_reports, positive_seconds) -> None:
     pcap.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
                       help="multiply every exchange's time bound by F (slow links)")
     pcap.add_argument("--strict", action="store_true", help="NON_STRICT (a SHOULD not met) and INCONCLUSIVE fail too")
+    replay_group = pcap.add_argument_group("the capture as a corpus: its frames through an implementation's decode")
+    replay_group.add_argument("--adapter", help="a built-in or library adapter (as for run) to decode every distinct "
+                                                "captured frame; where it disagrees with the reference is reported")
+    replay_group.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter (as for run)")
+    replay_group.add_argument("--adapter-arg", action="append", default=[], metavar="NAME=VALUE",
+                              help="an argument for a library adapter's class or factory (repeatable)")
+    replay_group.add_argument("--timeout", type=positive_seconds, default=5.0, help="seconds per request (subprocess)")
+    replay_group.add_argument("--memory-limit", type=count, default=2048, metavar="MB",
+                              help="data memory a subprocess adapter may use (default 2048; 0: no limit)")
+    replay_group.add_argument("--adapter-frames", type=count, default=100_000, metavar="N",
+                              help="distinct frames decoded at most (default 100,000)")
     add_reports(pcap)
     pcap.set_defaults(func=command_pcap)
 
 
 def command_pcap(args) -> int:
-    from .cli import UsageError, report_targets, terminal, write_reports
+    from .cli import UsageError, adapter_choice, report_targets, terminal, write_reports
     from .render.terminal import print_result
     from .suites import load_suite
 
@@ -98,6 +109,10 @@ def command_pcap(args) -> int:
     selection = Selection(frozenset(args.port) or None, frozenset(args.message), args.src, args.dst, args.host,
                           args.start, args.end, args.list_frames, args.time_scale)
     judge = CaptureJudge(suite.name, rules, edition, selection)
+    adapter = args.adapter is not None or args.adapter_cmd is not None
+    if adapter:
+        name, argv = adapter_choice(args, suite)
+        judge.corpus_limit = args.adapter_frames
     started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = time.perf_counter()
     damage, complete = [], True
@@ -117,6 +132,8 @@ def command_pcap(args) -> int:
         except ValueError as exc:
             damage.append(f"the recorded run cannot be replayed: {exc}")
             result.notes.append(damage[-1])
+    if adapter and complete:
+        merge(result, decoded_by(judge, suite, name, argv, args, edition), list(rules.keys), args.strict)
     console = terminal()
     print_result(result, console)
     problems = write_reports(result, targets, console)
@@ -193,6 +210,62 @@ def replay(about: dict, datagrams: list, strict: bool):
                      options=options, clock=link.now, started=_iso(t0))
 
 
+def decoded_by(judge: CaptureJudge, suite, name: str, argv, args, edition: str):
+    """The capture as a corpus: each distinct frame decoded by the implementation, judged as a vector case whose
+    verdict is the reference codec's."""
+    from .cli import UsageError, open_session
+    from .core.cases import Case
+    from .core.runner import run_cases
+    from .core.session import AdapterStartError
+
+    cases = []
+    for data, (group, number) in judge.corpus.items():
+        case = judge.rules.vector_case(group, data, number, edition)
+        if case is not None:
+            cases.append(Case(case["id"], group, "vector", case))
+    notes = [f"{len(cases):,} distinct frames decoded by the adapter"
+             + (f"; {judge.corpus_left:,} more not (--adapter-frames)" if judge.corpus_left else "")]
+    session = open_session(name, argv, args, suite)
+    try:
+        result = run_cases(session, suite, cases, edition=edition, adapter=name, strict=args.strict, notes=notes)
+    except AdapterStartError as exc:
+        raise UsageError(str(exc)) from exc
+    finally:
+        session.close()
+    for m in result.messages:
+        m.cases = collapsed(m.cases, {c.id: c.data for c in cases}, args.list_frames)
+    return result
+
+
+def collapsed(cases: list, data: dict, listed: int) -> list:
+    """One case per message and expectation (``…/capture/decode/valid`` or ``…/decode/<rule>``) for a frame's
+    decode cases: how many frames had each verdict, and the first failing ones."""
+    from .core.results import CaseResult, CheckResult
+    from .core.verdicts import Verdict, worst
+
+    groups: dict[str, list] = {}
+    for c in cases:
+        groups.setdefault(c.id.rsplit("/", 1)[0] + "/" + (c.rule or "valid"), []).append(c)
+    out = []
+    for case_id, members in groups.items():
+        counts: dict = {}
+        for c in members:
+            counts[c.verdict] = counts.get(c.verdict, 0) + 1
+        checks = [CheckResult("count", v, f"{n:,} frame{'s' if n != 1 else ''}") for v, n in
+                  sorted(counts.items(), key=lambda kv: kv[0].value)]
+        bad = [c for c in members if c.verdict is not Verdict.PASS]
+        for c in bad[:listed]:
+            frame = c.id.rsplit("/", 1)[1]
+            checks += [CheckResult(f"frame {frame}", k.verdict, k.detail, k.outcome, k.expected, k.actual, k.diffs,
+                                   k.note, k.clause) for k in c.checks]
+        if len(bad) > listed:
+            checks.append(CheckResult("more", worst(counts), f"{len(bad) - listed:,} more not listed"))
+        first = members[0]
+        out.append(CaseResult(case_id, first.message, worst(counts), first.expect, first.clause, checks, first.rule,
+                              sorted({e for c in members for e in c.errata})))
+    return out
+
+
 def merge(result, replayed, order: list[str], strict: bool) -> None:
     """Add a replay's scenario cases to a capture's result, each under its message."""
     from .core.results import MessageResult, message_verdict
@@ -204,8 +277,10 @@ def merge(result, replayed, order: list[str], strict: bool) -> None:
     keys = {m.name: m.key for m in result.messages + replayed.messages}
     result.messages = [MessageResult(name, keys[name], message_verdict(cases, strict), cases)
                        for name, cases in sorted(groups.items(), key=lambda kv: (rank.get(kv[0], len(rank)), kv[0]))]
-    result.notes += [f"scenarios replayed: {len(replayed.cases)} from the recorded run "
-                     f"({replayed.implementation})"] + replayed.notes
+    result.notes += [f"{len(replayed.cases):,} cases judged with {replayed.implementation} ({replayed.adapter})"]
+    result.notes += replayed.notes
+    result.incidents += replayed.incidents
+    result.stderr += replayed.stderr
 
 
 def _iso(t: float) -> str:

@@ -396,3 +396,30 @@ def test_mistaken_options_are_one_line(tmp_path, capsys, monkeypatch, argv, mess
 def test_damaged_pcapng_blocks_are_errors_not_tracebacks():
     with pytest.raises(CaptureError, match="truncated or damaged"):
         list(records(b"\x0a\x0d\x0d\x0a" + struct.pack("<I", 9999) + b"\x4d\x3c\x2b\x1a" + bytes(20)))
+
+
+# ---------------------------------------------------------------- the capture as a corpus (--adapter)
+
+@pytest.mark.parametrize("adapter, verdicts_", [
+    ("imcpy", {"PASS"}),
+    ("Reference", {"PASS"}),
+    ("NoCrcCheck", {"PASS", "FAIL"}),  # a mutant that accepts the frames whose CRC is wrong
+])
+def test_captured_frames_replayed_through_an_implementation(adapter, verdicts_, tmp_path, capsys):
+    if adapter != "imcpy":  # a mutant of tests/mutants.py, made over the definitions
+        (tmp_path / "mutant.py").write_text(
+            f"import sys\nsys.path.insert(0, {str(__import__('pathlib').Path(__file__).parent)!r})\n"
+            f"from mutants import {adapter}\nfrom imc_conformance.suites import load_suite\n"
+            f"adapter = {adapter}(load_suite('imc').defs)\n")
+        adapter = f"{tmp_path / 'mutant.py'}:adapter"
+    write_capture(tmp_path / "c.pcap", DEFS, SUITE.wire, EDITION, 600, damaged=0.1)
+    code, out = run(tmp_path / "c.pcap", "--adapter", adapter, "--list-frames", "3", "--json", tmp_path / "r.json",
+                    capsys=capsys)
+    doc = json.loads((tmp_path / "r.json").read_text())
+    decoded = {c["id"]: c for m in doc["messages"] for c in m["cases"] if "/capture/decode/" in c["id"]}
+    assert {c["verdict"] for c in decoded.values()} == verdicts_
+    assert any("distinct frames decoded by the adapter" in n for n in doc["notes"])
+    if "FAIL" in verdicts_:
+        failing = [c for c in decoded.values() if c["verdict"] == "FAIL"]
+        assert {c["id"].rsplit("/", 1)[1] for c in failing} == {"crc"}
+        assert all(len([k for k in c["checks"] if k["check"].startswith("frame ")]) <= 3 for c in failing)

@@ -58,6 +58,9 @@ class CaptureJudge:
         self.records = self.datagrams = 0
         self.valid: dict[str, list[int]] = {}  # group -> [valid frames, first, last]
         self.source = ""  # the file being judged, when there are several
+        self.corpus_limit = 0  # distinct frames kept to replay through an implementation (pcap --adapter)
+        self.corpus: dict[bytes, tuple[str, int]] = {}  # frame -> (group, its first frame number)
+        self.corpus_left = 0  # distinct frames beyond the limit
         self.recent: dict[bytes, None] = {}  # the last watched frames, oldest first, to tell duplicates
         self.duplicates = 0
         self.about: dict | None = None  # the recorded run the capture holds (run --pcap), if any
@@ -101,6 +104,12 @@ class CaptureJudge:
         if self.filtered and not self._addressed(frame.src, frame.dst):
             self.skipped["outside the selection"] += 1
             return
+        if (self.corpus_limit and not got.cut and (not self.groups or group in self.groups)
+                and got.payload not in self.corpus):
+            if len(self.corpus) < self.corpus_limit:
+                self.corpus[got.payload] = (group, got.number)
+            else:
+                self.corpus_left += 1
         if self.groups and group not in self.groups:
             self.skipped["outside the selection"] += 1
         elif got.cut:

@@ -84,3 +84,17 @@ class ImcCaptureRules:
             return Frame(group, exc.rule, exc.offset, exc.detail, self.clauses.get(exc.rule, ""))
         header = decoded["header"]
         return Frame(group, fields=decoded["fields"], src=header["src"], dst=header["dst"])
+
+    def vector_case(self, group: str, data: bytes, number: int, edition: str) -> dict | None:
+        """A captured frame as a vector case of the corpus's form (its verdict the reference codec's), to replay
+        through an implementation's decode; None for a frame no message of the suite can be told in."""
+        if group == UNIDENTIFIED:
+            return None
+        order = codec.byte_order_of(data)
+        case = {"id": f"imc/{group}/capture/decode/{number}", "clause": "imc-wire#what-real-receivers-do",
+                "checks": [f"decode-{order}"], "frames": {order: data.hex()}, "tags": ["capture"]}
+        try:
+            case["message"] = codec.decode(self.defs, data)
+        except FrameError as exc:
+            return case | {"expect": "invalid", "rule": exc.rule, "clause": self.clauses.get(exc.rule, case["clause"])}
+        return case | {"expect": "valid"}
