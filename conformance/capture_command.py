@@ -88,7 +88,8 @@ def add_command(sub, add_suite, add_reports, positive_seconds) -> None:
 
 
 def command_pcap(args) -> int:
-    from .cli import UsageError, adapter_choice, report_targets, terminal, write_reports
+    from .cli import adapter_choice, report_targets, terminal, write_reports
+    from .usage import UsageError
     from .render.terminal import print_result
     from .suites import load_suite
 
@@ -146,7 +147,7 @@ def command_pcap(args) -> int:
 
 def judge_file(judge: CaptureJudge, path: Path, named: bool) -> list[str]:
     """Feed every record of the capture at ``path``; the damage found (the records before it are judged)."""
-    from .cli import UsageError
+    from .usage import UsageError
 
     try:
         with path.open("rb") as handle:
@@ -213,7 +214,8 @@ def replay(about: dict, datagrams: list, strict: bool):
 def decoded_by(judge: CaptureJudge, suite, name: str, argv, args, edition: str):
     """The capture as a corpus: each distinct frame decoded by the implementation, judged as a vector case whose
     verdict is the reference codec's."""
-    from .cli import UsageError, open_session
+    from .cli import open_session
+    from .usage import UsageError
     from .core.cases import Case
     from .core.runner import run_cases
     from .core.session import AdapterStartError

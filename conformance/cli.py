@@ -22,13 +22,10 @@ from .files import CorpusError
 from .render.common import printable
 from .live import system_id
 from .suites import names as suite_names
+from .usage import UsageError
 
 REPORTS = ("json", "junit", "markdown", "html")
 DEFAULT_MEMORY_MB = 2048
-
-
-class UsageError(Exception):
-    pass
 
 
 def load_library_adapter(spec: str, suite, arguments: dict[str, str] | None = None):
@@ -398,10 +395,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_suite(gen)
     gen.add_argument("--check", action="store_true", help="only report drift; exit 1 if any")
     gen.set_defaults(func=command_generate)
-    from .capture_command import add_command
+    from . import capture_command, watch_command
     from .suites import load_suite
 
-    add_command(sub, add_suite, add_reports, positive_seconds)
+    capture_command.add_command(sub, add_suite, add_reports, positive_seconds)
+    watch_command.add_command(sub, add_suite, add_reports, positive_seconds, capture_command.address,
+                              capture_command.port, capture_command.count)
     for name in suite_names():
         load_suite(name).commands(sub)
     return parser

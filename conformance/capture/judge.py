@@ -82,6 +82,14 @@ class CaptureJudge:
             self.skipped[got if not got.startswith("link type") else f"{describe_linktype(record.linktype)}: "
                          "not Ethernet, raw IP, Linux cooked capture or BSD loopback"] += 1
             return
+        self.feed_datagram(got, source)
+
+    def feed_datagram(self, got: Datagram, source: str = "") -> None:
+        """Judge one UDP datagram (one a socket received, or one found in a record)."""
+        if self.origin is None:
+            self.origin = got.time
+        if got.time > self.last:
+            self.last = got.time
         self.source = source
         recorded = got.comment is not None and self.keep_commented  # a datagram of a recorded run: on its ports
         if recorded:
@@ -156,6 +164,17 @@ class CaptureJudge:
                         order.index(kv[0]) if kv[0] in order else len(order), kv[0]))]
         return RunResult(self.suite, title, self.edition, implementation, "capture", strict, started, duration,
                          messages, "", list(notes) + self.notes(), complete)
+
+    def standing(self) -> list[tuple[str, int, int, int]]:
+        """So far, per group: (group, valid frames, invalid frames, failed exchange observations)."""
+        rows: dict[str, list[int]] = {g: [n, 0, 0] for g, (n, _, _) in self.valid.items()}
+        for (group, case), tally in self.tallies.items():
+            bad = sum(n for v, n in tally.counts.items() if v is not Verdict.PASS)
+            row = rows.setdefault(group, [0, 0, 0])
+            row[1 if case.startswith("frame/") else 2] += bad
+        order = list(self.rules.keys)
+        return [(g, *row) for g, row in sorted(rows.items(), key=lambda kv: (
+            order.index(kv[0]) if kv[0] in order else len(order), kv[0]))]
 
     def notes(self) -> list[str]:
         out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged"

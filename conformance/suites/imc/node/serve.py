@@ -78,7 +78,7 @@ def parse_peers(items: list[str]) -> dict[str, float] | None:
 
 
 def command_serve(args, suite) -> int:
-    from ....cli import UsageError
+    from ....usage import UsageError
 
     edition = args.edition or suite.editions[0]
     if edition not in suite.editions:

@@ -1,0 +1,260 @@
+"""``imc-conformance watch``: judge live traffic as it passes, frame by frame and exchange by exchange, and send
+nothing. ``udp://ADDR:PORT`` judges what is sent to that socket (never joining a group); ``--iface NAME``
+sniffs an interface (scapy) and so sees whole exchanges. Reports on Ctrl-C or after ``--duration``."""
+
+from __future__ import annotations
+
+import datetime as dt
+import select
+import socket
+import sys
+import time
+from pathlib import Path
+
+from .capture.datagrams import ETHERNET, RAW, Datagram
+from .capture.judge import CaptureJudge, Selection
+from .capture.records import Record
+
+REFRESH = 1.0  # seconds between redraws of the table
+MAX_DATAGRAM = 65535
+
+
+def add_command(sub, add_suite, add_reports, positive_seconds, address, port, count) -> None:
+    watch = sub.add_parser("watch", help="judge live traffic as it passes (sends nothing): udp://ADDR:PORT or --iface")
+    watch.add_argument("source", nargs="?", metavar="udp://ADDR:PORT",
+                       help="judge what is sent to this socket (unicast; the socket is bound, no group is joined)")
+    watch.add_argument("--iface", metavar="NAME", help="sniff this interface instead (needs CAP_NET_RAW, e.g. root)")
+    add_suite(watch)
+    watch.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
+    watch.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
+                       help="with --iface: UDP ports carrying the suite's frames (default imc: 6001-6030, 30100-30104)")
+    watch.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
+    watch.add_argument("--host", type=address, metavar="ADDR|ID", help="only datagrams from or to this address or id")
+    watch.add_argument("--duration", type=positive_seconds, metavar="SECONDS", help="stop after this long (default: Ctrl-C)")
+    watch.add_argument("--list-frames", type=count, default=20, metavar="N", help="failing frames listed per case")
+    watch.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
+                       help="multiply every exchange's time bound by F")
+    watch.add_argument("--strict", action="store_true", help="NON_STRICT and INCONCLUSIVE fail too")
+    add_reports(watch)
+    watch.set_defaults(func=command_watch)
+
+
+def command_watch(args) -> int:
+    from .cli import report_targets, terminal, write_reports
+    from .usage import UsageError
+    from .render.terminal import print_result
+    from .suites import load_suite
+
+    targets = report_targets(args)
+    if (args.source is None) == (args.iface is None):
+        raise UsageError("give what to watch: udp://ADDR:PORT (a socket) or --iface NAME (an interface), one of them")
+    suite = load_suite(args.suite)
+    try:
+        rules = suite.capture_rules()
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    edition = args.edition or suite.editions[0]
+    if edition not in suite.editions:
+        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
+    unknown = set(args.message) - set(rules.keys)
+    if unknown:
+        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    selection = Selection(frozenset(args.port) or None, frozenset(args.message), host=args.host,
+                          listed=args.list_frames, scale=args.time_scale)
+    listen = open_socket(args.source) if args.source else open_sniffer(args.iface)
+    if args.source:  # everything sent to the watched socket is judged, whatever its port
+        selection.ports = frozenset([listen.address[1]])
+    judge = CaptureJudge(suite.name, rules, edition, selection)
+    what = args.source or f"interface {args.iface}"
+    started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+    began = time.monotonic()
+    end = began + args.duration if args.duration else float("inf")
+    console = terminal()
+    def judge_all(items) -> None:
+        for item in items:
+            if isinstance(item, Record):
+                judge.feed(item)
+            else:
+                judge.records += 1
+                judge.feed_datagram(item)
+
+    try:
+        with _table(console, judge) as redraw:
+            print(f"imc-conformance: watching {what} (Ctrl-C to stop)", file=sys.stderr, flush=True)
+            while time.monotonic() < end:
+                judge_all(listen.take(min(REFRESH, end - time.monotonic())))
+                redraw()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        judge_all(listen.stop())  # what arrived before the stop is judged too
+    result = judge.result(implementation=what, started=started, duration=round(time.monotonic() - began, 3),
+                          strict=args.strict, title=suite.title)
+    print_result(result, console)
+    return 2 if write_reports(result, targets, console) else result.exit_code()
+
+
+def _table(console, judge: CaptureJudge):
+    """A live per-message table (rich) on a terminal; elsewhere, nothing until the end."""
+    from contextlib import contextmanager
+
+    from rich.live import Live
+    from rich.table import Table
+
+    def table():
+        t = Table(title=f"{judge.records:,} records, {judge.datagrams:,} datagrams judged")
+        for column in ("message", "valid", "invalid", "exchange failures"):
+            t.add_column(column, justify="left" if column == "message" else "right")
+        for group, valid, invalid, exchange in judge.standing():
+            t.add_row(group, f"{valid:,}", f"{invalid:,}", f"{exchange:,}")
+        return t
+
+    @contextmanager
+    def live():
+        if not console.is_terminal:  # a log: a line whenever more was judged
+            shown = [0]
+
+            def line():
+                if judge.records != shown[0]:
+                    shown[0] = judge.records
+                    print(f"imc-conformance: {judge.records:,} records, {judge.datagrams:,} datagrams judged",
+                          file=sys.stderr, flush=True)
+            yield line
+            return
+        with Live(table(), console=console, refresh_per_second=2, transient=True) as view:
+            yield lambda: view.update(table())
+
+    return live()
+
+
+class SocketListener:
+    """A UDP socket bound to the watched address: every datagram sent to it, with its sender."""
+
+    def __init__(self, sock: socket.socket):
+        self.sock, self.address, self.number = sock, sock.getsockname(), 0
+
+    def take(self, wait: float) -> list[Datagram]:
+        """What arrived within ``wait`` seconds (at most a thousand datagrams at a time)."""
+        out = []
+        ready, _, _ = select.select([self.sock], [], [], max(0.0, wait))
+        while ready and len(out) < 1000:
+            try:
+                data, source = self.sock.recvfrom(MAX_DATAGRAM)
+            except OSError:  # nothing more, or an ICMP error reported on the socket
+                break
+            self.number += 1
+            out.append(Datagram(self.number, time.time(), source[0], source[1], self.address[0], self.address[1], data))
+        return out
+
+    def stop(self) -> list[Datagram]:
+        """Stop listening; what was already queued on the socket."""
+        out, more = [], self.take(0)
+        while more:
+            out, more = out + more, self.take(0)
+        self.sock.close()
+        return out
+
+
+def open_socket(url: str) -> SocketListener:
+    from .usage import UsageError
+    from .sessions.udp import group_address, parse_endpoint, resolve
+
+    try:
+        host, port = parse_endpoint(url, "watch")
+        family, address = resolve(host, port, "watch")
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    why = group_address(address[0])
+    if why:
+        raise UsageError(f"watch {url}: {why}; watch binds a unicast address and never joins a group "
+                         "(use --iface to see a group's traffic)")
+    sock = socket.socket(family, socket.SOCK_DGRAM)
+    try:
+        sock.bind(address)
+    except OSError as exc:
+        sock.close()
+        raise UsageError(f"watch {url}: cannot bind {address[0]}:{address[1]}: {exc.strerror or exc}") from None
+    sock.setblocking(False)
+    return SocketListener(sock)
+
+
+ARPHRD = {1: ETHERNET, 772: ETHERNET, 65534: RAW}  # Linux interface types: Ethernet, loopback, none (tun)
+
+
+class Sniffer:
+    """scapy's sniffer on an interface, its packets handed over as records. On loopback a packet socket sees
+    every packet twice (leaving and arriving): the second, identical copy is dropped."""
+
+    def __init__(self, iface: str, linktype: int):
+        import logging
+        from queue import SimpleQueue
+
+        from scapy.sendrecv import AsyncSniffer
+
+        logging.getLogger("scapy.runtime").setLevel(logging.ERROR)  # its guess at the loopback's link layer
+        self.linktype, self.loopback = linktype, iface == "lo" or Path(f"/sys/class/net/{iface}/type").read_text(
+            ).strip() == "772"
+        self.queue: SimpleQueue = SimpleQueue()
+        self.number, self.previous = 0, None
+        self.sniffer = AsyncSniffer(iface=iface, store=False, prn=self.queue.put)  # no BPF: it needs tcpdump
+        self.sniffer.start()
+        deadline = time.monotonic() + 10  # until its socket is open (scapy sets continue_sniff then)
+        while not getattr(self.sniffer, "continue_sniff", False) and self.sniffer.thread.is_alive():
+            if time.monotonic() > deadline:
+                raise OSError("the sniffer did not start within 10 s")
+            time.sleep(0.01)
+        problem = getattr(self.sniffer, "exception", None)
+        if problem is not None:
+            raise problem
+        if not self.sniffer.thread.is_alive():
+            raise OSError("the sniffer stopped at once")
+
+    def take(self, wait: float) -> list[Record]:
+        from queue import Empty
+
+        out = []
+        until = time.monotonic() + wait
+        while True:
+            try:
+                packet = self.queue.get(timeout=max(0.0, until - time.monotonic()))
+            except Empty:
+                return out
+            data = bytes(packet)
+            if self.loopback and data == self.previous:
+                self.previous = None
+                continue
+            self.previous = data
+            self.number += 1
+            out.append(Record(self.number, float(packet.time), self.linktype, data, len(data)))
+            if self.queue.empty():
+                return out
+
+    def stop(self) -> list[Record]:
+        """Stop sniffing; what was already captured."""
+        try:
+            self.sniffer.stop()
+        except Exception:  # noqa: BLE001 - a sniffer that never started has nothing to stop
+            pass
+        out, more = [], self.take(0)
+        while more:
+            out, more = out + more, self.take(0)
+        return out
+
+
+def open_sniffer(iface: str) -> Sniffer:
+    from .usage import UsageError
+
+    kind = Path(f"/sys/class/net/{iface}/type")
+    if "/" in iface or not kind.exists():
+        raise UsageError(f"--iface {iface}: no such network interface")
+    linktype = ARPHRD.get(int(kind.read_text().strip() or -1))
+    if linktype is None:
+        raise UsageError(f"--iface {iface}: its link layer (Linux type {kind.read_text().strip()}) is not Ethernet, "
+                         "loopback or raw IP")
+    try:
+        return Sniffer(iface, linktype)
+    except PermissionError:
+        raise UsageError(f"--iface {iface}: sniffing needs privileges (CAP_NET_RAW: run as root or grant the "
+                         "capability); udp://ADDR:PORT watches a socket without them") from None
+    except OSError as exc:
+        raise UsageError(f"--iface {iface}: cannot sniff: {exc.strerror or exc}") from None
