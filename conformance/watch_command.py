@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import datetime as dt
 import select
+import signal
 import socket
 import sys
 import time
@@ -78,15 +79,18 @@ def command_watch(args) -> int:
                 judge.records += 1
                 judge.feed_datagram(item)
 
+    stopping: list[int] = []  # Ctrl-C or SIGTERM: finish the datagrams in hand, then stop
+    handlers = {sig: signal.signal(sig, lambda signum, frame: stopping.append(signum))
+                for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         with _table(console, judge) as redraw:
             print(f"imc-conformance: watching {what} (Ctrl-C to stop)", file=sys.stderr, flush=True)
-            while time.monotonic() < end:
+            while not stopping and time.monotonic() < end:
                 judge_all(listen.take(min(REFRESH, end - time.monotonic())))
                 redraw()
-    except KeyboardInterrupt:
-        pass
     finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
         judge_all(listen.stop())  # what arrived before the stop is judged too
     result = judge.result(implementation=what, started=started, duration=round(time.monotonic() - began, 3),
                           strict=args.strict, title=suite.title)

@@ -257,7 +257,7 @@ def test_an_unanswered_request_fails_with_its_frame_and_time():
     got = exchange((0, STATION, request()), end=30)
     case = got[f"{EX}/answered"]
     assert case.verdict is Verdict.FAIL and case.checks[1].check == "frame 1"
-    assert "no AcousticStatus within 20 s" in case.checks[1].detail and "at 0.000000 s" in case.checks[1].detail
+    assert "no AcousticStatus from system 30 to 19696 within 20 s" in case.checks[1].detail and "at 0.000000 s" in case.checks[1].detail
 
 
 def test_a_capture_ending_before_the_bound_is_inconclusive():
@@ -290,7 +290,7 @@ def test_a_reply_to_another_system_fails():
 
 def test_a_late_reply_and_a_sequence_without_end_fail():
     got = exchange((0, STATION, request()), (25, VEHICLE, status("QUEUED")), end=80)
-    assert "no AcousticStatus within 20 s" in got[f"{EX}/answered"].checks[1].detail
+    assert "no AcousticStatus from system 30 to 19696 within 20 s" in got[f"{EX}/answered"].checks[1].detail
     got = exchange((0, STATION, request()), (1, VEHICLE, status("QUEUED")), end=80)
     assert got[f"{EX}/terminal"].verdict is Verdict.FAIL
     assert "no terminal AcousticStatus within 20 s" in got[f"{EX}/terminal"].checks[1].detail

@@ -480,7 +480,10 @@ def test_hostile_probe(hostile, tmp_path, capsys, reference_verdicts, mode, verd
 
 def test_the_benchmark_says_plainly_when_it_misses_a_target():
     from imc_conformance.benchmark import target_lines
-    lines = target_lines({"library": 0.4, "subprocess": 0.5}, 3623)
+    lines = target_lines({"library": 0.4, "subprocess": 0.5, "capture": 15.0},
+                         {"library": 3623, "subprocess": 3623, "capture": 1_000_000})
     assert lines == ["target whole corpus in-process: 0.400 s (< 2 s): met",
                      "target in-process throughput: 9,058 cases/s (>= 20,000 cases/s): MISSED",
-                     "target subprocess throughput: 7,246 cases/s (>= 5,000 cases/s): met"]
+                     "target subprocess throughput: 7,246 cases/s (>= 5,000 cases/s): met",
+                     "target capture judged, whole command: 66,667 frames/s (>= 100,000 frames/s): MISSED",
+                     "target capture judged, whole command (floor): 66,667 frames/s (>= 50,000 frames/s): met"]

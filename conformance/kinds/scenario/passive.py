@@ -189,7 +189,7 @@ class PassiveExchanges:
                                       f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
             return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
-                                  f"no {ex['reply']} within {bound:g} s", o.request)]
+                                  f"no {ex['reply']} {self._between(o)} within {bound:g} s", o.request)]
         self.ended[id(o.rule)].append(o)
         if o.rule.terminal is not None and o.terminal is None:
             return [self._finding(o, "terminal", LEVELS[ex["level"]], ex["state"]["clause"],
@@ -203,6 +203,11 @@ class PassiveExchanges:
             detail = f"request frame {o.request.number}: {detail}"
         return Finding(o.request.message, f"exchange/{o.rule.exchange['id']}/{aspect}", verdict, clause, detail,
                        w.number, w.time, None, w.where)
+
+    def _between(self, o: _Open) -> str:
+        """Who owed whom the reply: ``from system 30 to 19696``."""
+        node = "any system" if o.request.dst in (None, self.anyone) else f"system {o.request.dst}"
+        return f"from {node} to {o.request.src}"
 
     def _name(self, message: str, path: str, value) -> str:
         named = self.wire.present(Parsed(None, message, {"fields": {path: value}})).get("fields", {}).get(path, value)

@@ -6,7 +6,9 @@ nothing outside reachable), because DUNE announces itself on a multicast group a
 talks over another. There it starts the Iridium gateway stand-in, DUNE's acoustic peer and DUNE as the vehicle,
 runs ``imc-conformance run --target`` once per profile (vehicle and peer restarted fresh in between; the
 robustness phase restarts both to bisect), captures the exchange on loopback, stops everything it started by PID and checks that
-no DUNE process is left. It writes ``reports/dune-<profile>.{json,html}`` and ``reports/dune-exchange.pcap``, then runs
+no DUNE process is left. It writes ``reports/dune-<profile>.{json,html}``, the session's own recording of each run
+``reports/dune-<profile>.pcapng`` (``imc-conformance pcap`` replays it) and everything on the IMC ports of loopback
+(DUNE's traffic with its peer too) in ``reports/dune-exchange.pcap``, then runs
 the expectations test (``tests/dune_expectations.py``: the verdict per message DUNE is known to get).
 """
 
@@ -147,7 +149,8 @@ def _suite(args, run: Path, profile: str) -> int:
             "--allow-effects", "--claims", str(run / "claims.json"), "--profile", profile,
             "--param", f"peer={PEER}", "--param", f"beacon={PEER}", "--param", "sms_number=+351000000000",
             "--param", f"remote_system={PEER_ID:#06x}",
-            "--json", str(args.reports / f"dune-{profile}.json"), "--html", str(args.reports / f"dune-{profile}.html")]
+            "--json", str(args.reports / f"dune-{profile}.json"), "--html", str(args.reports / f"dune-{profile}.html"),
+            "--pcap", str(args.reports / f"dune-{profile}.pcapng")]
     if not args.no_robustness:  # a simulated vehicle: the corpus's own destinations are harmless here
         argv += ["--robustness", "--replay-effects", "--restart-cmd", restart_cmd]
     print(f"== {profile} profile: imc-conformance {' '.join(argv)}", flush=True)
@@ -174,7 +177,12 @@ def _save_capture(sniffer, path: Path) -> None:
         return
     from scapy.all import wrpcap
 
-    packets = sniffer.stop()
+    packets, previous = [], None
+    for packet in sniffer.stop():  # a packet socket on loopback sees each packet twice, leaving and arriving
+        data = bytes(packet)
+        if data != previous:
+            packets.append(packet)
+        previous = None if data == previous else data
     wrpcap(str(path), packets)
     print(f"capture: {len(packets)} datagrams in {path}")
 
