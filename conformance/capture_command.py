@@ -87,13 +87,11 @@ def add_command(sub, add_suite, add_reports, positive_seconds) -> None:
     pcap.set_defaults(func=command_pcap)
 
 
-def command_pcap(args) -> int:
-    from .cli import adapter_choice, report_targets, terminal, write_reports
-    from .usage import UsageError
-    from .render.terminal import print_result
+def capture_rules(args):
+    """The suite, its capture rules and the edition the options name; usage errors for what they cannot be."""
     from .suites import load_suite
+    from .usage import UsageError
 
-    targets = report_targets(args)
     suite = load_suite(args.suite)
     try:
         rules = suite.capture_rules()
@@ -105,6 +103,16 @@ def command_pcap(args) -> int:
     unknown = set(args.message) - set(rules.keys)
     if unknown:
         raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    return suite, rules, edition
+
+
+def command_pcap(args) -> int:
+    from .cli import adapter_choice, report_targets, terminal, write_reports
+    from .usage import UsageError
+    from .render.terminal import print_result
+
+    targets = report_targets(args)
+    suite, rules, edition = capture_rules(args)
     if args.start is not None and args.end is not None and args.end < args.start:
         raise UsageError(f"--end {args.end:g} is before --start {args.start:g}")
     selection = Selection(frozenset(args.port) or None, frozenset(args.message), args.src, args.dst, args.host,

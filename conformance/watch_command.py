@@ -43,23 +43,13 @@ def add_command(sub, add_suite, add_reports, positive_seconds, address, port, co
 def command_watch(args) -> int:
     from .cli import report_targets, terminal, write_reports
     from .usage import UsageError
+    from .capture_command import capture_rules
     from .render.terminal import print_result
-    from .suites import load_suite
 
     targets = report_targets(args)
     if (args.source is None) == (args.iface is None):
         raise UsageError("give what to watch: udp://ADDR:PORT (a socket) or --iface NAME (an interface), one of them")
-    suite = load_suite(args.suite)
-    try:
-        rules = suite.capture_rules()
-    except ValueError as exc:
-        raise UsageError(str(exc)) from exc
-    edition = args.edition or suite.editions[0]
-    if edition not in suite.editions:
-        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
-    unknown = set(args.message) - set(rules.keys)
-    if unknown:
-        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    suite, rules, edition = capture_rules(args)
     selection = Selection(frozenset(args.port) or None, frozenset(args.message), host=args.host,
                           listed=args.list_frames, scale=args.time_scale)
     listen = open_socket(args.source) if args.source else open_sniffer(args.iface)
@@ -161,7 +151,7 @@ class SocketListener:
 
 def open_socket(url: str) -> SocketListener:
     from .usage import UsageError
-    from .sessions.udp import group_address, parse_endpoint, resolve
+    from .sessions.udp import bound_socket, group_address, parse_endpoint, resolve
 
     try:
         host, port = parse_endpoint(url, "watch")
@@ -172,12 +162,10 @@ def open_socket(url: str) -> SocketListener:
     if why:
         raise UsageError(f"watch {url}: {why}; watch binds a unicast address and never joins a group "
                          "(use --iface to see a group's traffic)")
-    sock = socket.socket(family, socket.SOCK_DGRAM)
     try:
-        sock.bind(address)
-    except OSError as exc:
-        sock.close()
-        raise UsageError(f"watch {url}: cannot bind {address[0]}:{address[1]}: {exc.strerror or exc}") from None
+        sock = bound_socket(family, address, f"watch {url}")
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     sock.setblocking(False)
     return SocketListener(sock)
 

@@ -8,6 +8,8 @@ import struct
 from decimal import Decimal
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scapy.layers.inet import IP, UDP, fragment
 from scapy.layers.inet6 import IPv6, IPv6ExtHdrFragment, fragment6
 from scapy.layers.l2 import CookedLinux, CookedLinuxV2, Dot1AD, Dot1Q, Ether, Loopback
@@ -423,3 +425,51 @@ def test_captured_frames_replayed_through_an_implementation(adapter, verdicts_, 
         failing = [c for c in decoded.values() if c["verdict"] == "FAIL"]
         assert {c["id"].rsplit("/", 1)[1] for c in failing} == {"crc"}
         assert all(len([k for k in c["checks"] if k["check"].startswith("frame ")]) <= 3 for c in failing)
+
+
+# ---------------------------------------------------------------- hostile captures
+
+def _small_captures(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("captures")
+    packets = [Ether() / IP(src="10.0.0.1", dst="10.0.0.30") / UDP(sport=6001, dport=6002) / Raw(request(n))
+               for n in range(3)]
+    packets += fragment(IP(src="10.0.0.30", dst="10.0.0.1", id=5) / UDP(sport=6002, dport=6001)
+                        / Raw(frame("AcousticSystems", {"list": "y" * 900}, VEHICLE, STATION)), fragsize=400)
+    packets = [p if Ether in p else Ether() / p for p in packets]
+    wrpcap(str(folder / "c.pcap"), packets)
+    writer = PcapNgWriter(str(folder / "c.pcapng"))
+    for p in packets:
+        writer.write(p)
+    writer.close()
+    return [(folder / "c.pcap").read_bytes(), (folder / "c.pcapng").read_bytes()]
+
+
+@pytest.fixture(scope="module")
+def small_captures(tmp_path_factory):
+    return _small_captures(tmp_path_factory)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(which=st.integers(0, 1), edits=st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 255)), max_size=8),
+       cut=st.integers(0, 10_000))
+def test_a_damaged_capture_is_judged_or_refused_never_a_crash(small_captures, which, edits, cut):
+    buf = bytearray(small_captures[which])
+    for at, value in edits:
+        buf[at % len(buf)] = value
+    buf = bytes(buf[:len(buf) - cut % 64])
+    j = CaptureJudge("imc", SUITE.capture_rules(), EDITION, Selection())
+    try:
+        for record in records(buf):  # as the pcap command does: the records before any damage are judged
+            j.feed(record)
+    except CaptureError:
+        pass
+    j.result(implementation="fuzz", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False, title="IMC")
+
+
+def test_a_timestamp_no_calendar_holds_is_shown_in_seconds():
+    result = judge(PCAP_HEADER + struct.pack("<IIII", 0xFFFFFFFF, 0, 0, 0) + struct.pack("<IIII", 0, 0, 0, 0))
+    assert "from 4294967295.000000 s after 1970" in result.notes[0] or "from 2106-" in result.notes[0]
+    ng = (b"\x0a\x0d\x0d\x0a" + struct.pack("<I", 28) + b"\x4d\x3c\x2b\x1a" + struct.pack("<HHq", 1, 0, -1)
+          + struct.pack("<I", 28) + struct.pack("<IIHHI", 1, 20, 1, 0, 0) + struct.pack("<I", 20)
+          + struct.pack("<II", 6, 32) + struct.pack("<IIIII", 0, 0xFFFFFFFF, 0xFFFFFFFF, 0, 0) + struct.pack("<I", 32))
+    assert "s after 1970" in judge(ng).notes[0]  # 2^64 microseconds: no calendar date

@@ -250,4 +250,7 @@ def _place(d: Datagram, source: str) -> str:
 
 
 def _when(t: float) -> str:
-    return dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(timespec="microseconds")
+    try:
+        return dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(timespec="microseconds")
+    except (OverflowError, ValueError, OSError):  # a damaged or odd timestamp: no calendar date holds it
+        return f"{t:.6f} s after 1970"

@@ -49,6 +49,17 @@ def resolve(host: str, port: int, what: str) -> tuple[int, tuple]:
     return family, address
 
 
+def bound_socket(family: int, address: tuple, what: str) -> socket.socket:
+    """A UDP socket bound to ``address``; ValueError naming ``what`` if the bind fails."""
+    sock = socket.socket(family, socket.SOCK_DGRAM)
+    try:
+        sock.bind(address)
+    except OSError as exc:
+        sock.close()
+        raise ValueError(f"{what}: cannot bind {address[0]}:{address[1]}: {exc.strerror or exc}") from None
+    return sock
+
+
 def group_address(host: str) -> str | None:
     """Why ``host`` (a numeric address) is not a unicast address, or None. (A subnet's directed broadcast address
     cannot be told from a host's without the netmask: the send then fails, and says so.)"""

@@ -24,6 +24,7 @@ SEEN_LIMIT = 1 << 16  # decoded payloads remembered (repeated statuses and reque
 UNIDENTIFIED = "unidentified"  # frames whose message id cannot be read or is the null id
 HEAD = {b"\x54\xfe": struct.Struct("<HHH"), b"\xfe\x54": struct.Struct(">HHH")}
 ADDRESSING = {b"\x54\xfe": struct.Struct("<HBH"), b"\xfe\x54": struct.Struct(">HBH")}
+FOOTER = {b"\x54\xfe": struct.Struct("<H"), b"\xfe\x54": struct.Struct(">H")}
 
 
 class ImcCaptureRules:
@@ -54,7 +55,7 @@ class ImcCaptureRules:
         group = self.ours.get(mgid)
         end = codec.HEADER_SIZE + size
         whole = n >= end + codec.FOOTER_SIZE and size <= self.defs.max_payload
-        sound = whole and arc(p[:end]) == struct.unpack_from(head.format[0] + "H", p, end)[0]
+        sound = whole and arc(p[:end]) == FOOTER[p[:2]].unpack_from(p, end)[0]
         if group is None:  # a message the suite does not cover: its framing is judged, not its fields
             if not sound or mgid == self.defs.null_id:
                 return self._decoded(p, UNIDENTIFIED)

@@ -7,7 +7,7 @@ import socket
 import sys
 import time
 
-from ....sessions.udp import MAX_DATAGRAM, group_address, resolve
+from ....sessions.udp import MAX_DATAGRAM, bound_socket, group_address, resolve
 from .breaks import BREAKS
 from .node import ReferenceNode
 
@@ -91,12 +91,10 @@ def command_serve(args, suite) -> int:
         raise UsageError(str(exc)) from exc
     if group_address(address[0]):
         raise UsageError(f"--host {args.host}: {group_address(address[0])}; the reference node listens on one address")
-    sock = socket.socket(family, socket.SOCK_DGRAM)
     try:
-        sock.bind(address)
-    except OSError as exc:
-        sock.close()
-        raise UsageError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from exc
+        sock = bound_socket(family, address, f"cannot listen on {args.host}:{args.port}")
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
     offset = time.time() - time.monotonic()
     node = ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=sock.getsockname()[:2], name=name,
                          system=system, peers=peers, loss=args.loss, dup=args.dup, seed=args.seed, broken=args.broken,
