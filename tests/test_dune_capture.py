@@ -1,0 +1,79 @@
+"""Real DUNE traffic, recorded by ``make dune-conformance --no-robustness`` (``run --pcap``, in its network namespace;
+DUNE from the imcpy 1.1.2 sdist as lauv-simulator-1, the seed profile's scenarios): the pcap command replays the
+scenario engine over it and gives the live run's verdicts, and the passive exchange rules find in the bare frames
+what the scenarios found. Why DUNE fails what it fails is in the README's DUNE section, with DUNE's source lines."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from imc_conformance.cli import main
+
+RECORDING = Path(__file__).parent / "data" / "dune-seed.pcapng"
+
+# What the live run said (reports/dune-seed.json of the recording run); every other scenario case is PASS.
+NOT_PASS = {
+    "imc/SmsTx/scenario/state": "UNSUPPORTED",  # not claimed: no GSM modem in the simulation
+    "imc/HistoricDataQuery/scenario/sample-priority": "NON_STRICT",  # DataStore keeps -127 samples
+    "imc/RemoteCommand/scenario/forwarded": "NON_STRICT",  # kept apart and forwarded by another route
+    "imc/AcousticOperation/scenario/reverse-range": "FAIL",  # UAN does not implement REVERSE_RANGE
+    "imc/AcousticOperation/scenario/msg-short": "FAIL",  # CommManager drops it without a reply
+    "imc/AcousticOperation/scenario/msg-without-message": "FAIL",  # kills CommManager
+    "imc/AcousticOperation/scenario/unsupported-op": "NON_STRICT",
+    "imc/AcousticRequest/scenario/timeout": "NON_STRICT",
+    # DUNE honours an AcousticRequest only from its own system
+    **{f"imc/AcousticRequest/scenario/{name}": "FAIL" for name in (
+        "range", "range-big-endian", "reverse-range", "msg", "abort", "raw-without-devdatabinary",
+        "msg-without-message", "unknown-destination", "two-at-once", "raw")},
+    # the same silences, seen by the passive exchange rules in the bare frames
+    "imc/AcousticOperation/capture/exchange/acoustic-operation/answered": "FAIL",
+    "imc/AcousticRequest/capture/exchange/acoustic-request/answered": "FAIL",
+}
+MESSAGES = {"Heartbeat": "PASS", "Announce": "PASS", "SmsTx": "UNSUPPORTED", "IridiumMsgTx": "PASS",
+            "IridiumTxStatus": "PASS", "HistoricData": "PASS", "HistoricDataQuery": "PASS", "RemoteCommand": "PASS",
+            "LblConfig": "PASS", "AcousticOperation": "FAIL", "AcousticSystemsQuery": "PASS",
+            "AcousticSystems": "PASS", "AcousticRequest": "FAIL", "AcousticStatus": "PASS"}
+
+
+@pytest.fixture(scope="module")
+def judged(tmp_path_factory):
+    out = tmp_path_factory.mktemp("dune") / "r.json"
+    code = main(["pcap", str(RECORDING), "--json", str(out)])
+    return code, json.loads(out.read_text())
+
+
+def test_the_recording_is_small_enough_to_keep():
+    assert RECORDING.stat().st_size < 1_000_000
+
+
+def test_dune_replayed_gives_the_live_verdicts(judged):
+    code, doc = judged
+    verdicts = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    scenarios = {k: v for k, v in verdicts.items() if "/scenario/" in k}
+    assert len(scenarios) == 66
+    assert {k: v for k, v in verdicts.items() if v != "PASS"} == NOT_PASS
+    assert {m["name"]: m["verdict"] for m in doc["messages"]} == MESSAGES
+    assert code == 1
+    assert not [n for n in doc["notes"] if n.startswith("the replay sent")]
+
+
+def test_dune_frames_are_all_valid(judged):
+    _, doc = judged
+    frames = {c["id"]: c for m in doc["messages"] for c in m["cases"] if "/capture/frame/" in c["id"]}
+    assert frames and all(c["id"].endswith("/frame/valid") and c["verdict"] == "PASS" for c in frames.values())
+    assert doc["notes"][0].startswith("1,503 records, 1,503 datagrams on the ports judged")
+
+
+def test_the_passive_rules_name_who_did_not_answer(judged):
+    _, doc = judged
+    case = next(c for m in doc["messages"] for c in m["cases"]
+                if c["id"] == "imc/AcousticRequest/capture/exchange/acoustic-request/answered")
+    counts = {k["verdict"]: k["detail"] for k in case["checks"] if k["check"] == "count"}
+    assert counts == {"FAIL": "11 exchanges", "INCONCLUSIVE": "1 exchange"}  # the last: the recording ends first
+    listed = [k for k in case["checks"] if k["check"].startswith("frame ")]
+    assert [k["verdict"] for k in listed] == ["FAIL"] * 11 + ["INCONCLUSIVE"]
+    assert all("no AcousticStatus from system 209 to 19696 within 20 s" in k["detail"] for k in listed[:11])
+    assert "the capture ends" in listed[11]["detail"]
