@@ -5,16 +5,16 @@ from __future__ import annotations
 from scapy.layers.inet import UDP
 from scapy.packet import bind_bottom_up, bind_top_down, split_bottom_up, split_top_down
 
+from ..suites.imc.capture import PORTS
 from .frame import IMC
 
-PORTS = (*range(6001, 6031), *range(30100, 30105))  # unicast, then multicast/broadcast announcements
 DEFAULT_PORT = 6001
 
 
 def bind() -> None:
     """Dissect a UDP datagram from or to one of ``PORTS`` as IMC; ``UDP()/IMC()`` gets ports 6001 → 6001."""
     unbind()
-    for port in PORTS:
+    for port in sorted(PORTS):
         bind_bottom_up(UDP, IMC, sport=port)
         bind_bottom_up(UDP, IMC, dport=port)
     bind_top_down(UDP, IMC, sport=DEFAULT_PORT, dport=DEFAULT_PORT)
@@ -22,7 +22,7 @@ def bind() -> None:
 
 def unbind() -> None:
     """Undo ``bind()``."""
-    for port in PORTS:
+    for port in sorted(PORTS):
         split_bottom_up(UDP, IMC, sport=port)
         split_bottom_up(UDP, IMC, dport=port)
     split_top_down(UDP, IMC, sport=DEFAULT_PORT, dport=DEFAULT_PORT)
