@@ -115,3 +115,14 @@ def test_tshark_reads_the_recording_with_its_comments(corpus, tmp_path):
     assert len(rows) == len(ours) > 100
     assert [(int(n), c) for n, c, *_ in rows] == [(r.number, r.comment) for r in ours]
     assert {row[2] for row in rows} == {"6001", "6002"} and any("/scenario/" in row[1] for row in rows)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--adapter", "imcpy", "--pcap", "run.pcapng"], "--pcap records a live run's datagrams: give --target"),
+    (["--target", "udp://127.0.0.1:9", "--pcap", "/proc/no/run.pcapng"], "cannot write the pcapng to /proc/no/run.pcapng"),
+])
+def test_a_recording_that_cannot_be_made_is_one_line(argv, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
