@@ -52,26 +52,31 @@ def count(text: str) -> int:
     return int(text)
 
 
+def add_judging(parser, add_suite, positive_seconds) -> None:
+    """The options pcap and watch share: what to judge against, which frames, how to report."""
+    add_suite(parser)
+    parser.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
+    parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
+                        help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")
+    parser.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
+    parser.add_argument("--list-frames", type=count, default=20, metavar="N",
+                        help="failing frames listed per message and rule (default 20)")
+    parser.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
+                        help="multiply every exchange's time bound by F (slow links)")
+    parser.add_argument("--strict", action="store_true", help="NON_STRICT (a SHOULD not met) and INCONCLUSIVE fail too")
+
+
 def add_command(sub, add_suite, add_reports, positive_seconds) -> None:
     pcap = sub.add_parser("pcap", help="judge captured traffic (pcap or pcapng): every frame, every exchange")
     pcap.add_argument("files", nargs="+", metavar="FILE", help="pcap or pcapng captures (Ethernet, raw IP, Linux "
                                                                 "cooked SLL/SLL2, BSD loopback; IPv4 and IPv6)")
-    add_suite(pcap)
-    pcap.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
-    pcap.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
-                      help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")
-    pcap.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
+    add_judging(pcap, add_suite, positive_seconds)
     pcap.add_argument("--src", type=address, metavar="ADDR|ID", help="only datagrams from this IP address or system id")
     pcap.add_argument("--dst", type=address, metavar="ADDR|ID", help="only datagrams to this IP address or system id")
     pcap.add_argument("--host", type=address, metavar="ADDR|ID",
                       help="only datagrams from or to this IP address or system id (keeps whole exchanges)")
     pcap.add_argument("--start", type=seconds, metavar="SECONDS", help="only from this many seconds into the capture")
     pcap.add_argument("--end", type=seconds, metavar="SECONDS", help="only until this many seconds into the capture")
-    pcap.add_argument("--list-frames", type=count, default=20, metavar="N",
-                      help="failing frames listed per message and rule (default 20)")
-    pcap.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
-                      help="multiply every exchange's time bound by F (slow links)")
-    pcap.add_argument("--strict", action="store_true", help="NON_STRICT (a SHOULD not met) and INCONCLUSIVE fail too")
     replay_group = pcap.add_argument_group("the capture as a corpus: its frames through an implementation's decode")
     replay_group.add_argument("--adapter", help="a built-in or library adapter (as for run) to decode every distinct "
                                                 "captured frame; where it disagrees with the reference is reported")

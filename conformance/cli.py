@@ -400,7 +400,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     capture_command.add_command(sub, add_suite, add_reports, positive_seconds)
     watch_command.add_command(sub, add_suite, add_reports, positive_seconds, capture_command.address,
-                              capture_command.port, capture_command.count)
+                              capture_command.add_judging)
     for name in suite_names():
         load_suite(name).commands(sub)
     return parser

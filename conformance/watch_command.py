@@ -20,22 +20,14 @@ REFRESH = 1.0  # seconds between redraws of the table
 MAX_DATAGRAM = 65535
 
 
-def add_command(sub, add_suite, add_reports, positive_seconds, address, port, count) -> None:
+def add_command(sub, add_suite, add_reports, positive_seconds, address, add_judging) -> None:
     watch = sub.add_parser("watch", help="judge live traffic as it passes (sends nothing): udp://ADDR:PORT or --iface")
     watch.add_argument("source", nargs="?", metavar="udp://ADDR:PORT",
                        help="judge what is sent to this socket (unicast; the socket is bound, no group is joined)")
     watch.add_argument("--iface", metavar="NAME", help="sniff this interface instead (needs CAP_NET_RAW, e.g. root)")
-    add_suite(watch)
-    watch.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
-    watch.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
-                       help="with --iface: UDP ports carrying the suite's frames (default imc: 6001-6030, 30100-30104)")
-    watch.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
+    add_judging(watch, add_suite, positive_seconds)
     watch.add_argument("--host", type=address, metavar="ADDR|ID", help="only datagrams from or to this address or id")
     watch.add_argument("--duration", type=positive_seconds, metavar="SECONDS", help="stop after this long (default: Ctrl-C)")
-    watch.add_argument("--list-frames", type=count, default=20, metavar="N", help="failing frames listed per case")
-    watch.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
-                       help="multiply every exchange's time bound by F")
-    watch.add_argument("--strict", action="store_true", help="NON_STRICT and INCONCLUSIVE fail too")
     add_reports(watch)
     watch.set_defaults(func=command_watch)
 
@@ -49,6 +41,8 @@ def command_watch(args) -> int:
     targets = report_targets(args)
     if (args.source is None) == (args.iface is None):
         raise UsageError("give what to watch: udp://ADDR:PORT (a socket) or --iface NAME (an interface), one of them")
+    if args.source and args.port:
+        raise UsageError("--port is for --iface: what is sent to the watched socket is judged whatever its port")
     suite, rules, edition = capture_rules(args)
     selection = Selection(frozenset(args.port) or None, frozenset(args.message), host=args.host,
                           listed=args.list_frames, scale=args.time_scale)

@@ -95,6 +95,7 @@ def test_sniffing_without_privileges_says_so(tmp_path):
     (["--iface", "../lo"], "no such network interface"),
     (["udp://127.0.0.1:6001", "--message", "Nope"], "unknown message(s): Nope"),
     (["udp://example.invalid:6001"], "example.invalid"),
+    (["udp://127.0.0.1:6001", "--port", "6002"], "--port is for --iface"),
 ])
 def test_mistaken_watches_are_one_line(argv, message, capsys):
     assert main(["watch", *argv]) == 2
