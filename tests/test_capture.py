@@ -473,3 +473,11 @@ def test_a_timestamp_no_calendar_holds_is_shown_in_seconds():
           + struct.pack("<I", 28) + struct.pack("<IIHHI", 1, 20, 1, 0, 0) + struct.pack("<I", 20)
           + struct.pack("<II", 6, 32) + struct.pack("<IIIII", 0, 0xFFFFFFFF, 0xFFFFFFFF, 0, 0) + struct.pack("<I", 32))
     assert "s after 1970" in judge(ng).notes[0]  # 2^64 microseconds: no calendar date
+
+
+def test_two_requesters_with_the_same_req_id_are_told_apart():
+    other = 0x5000
+    got = exchange((0, STATION, request(7)), (0.1, other, request(7, src=other)),
+                   (1, VEHICLE, status("SENT", dst=other)), (2, VEHICLE, status("SENT")), end=30)
+    assert got[f"{EX}/to-requester"].verdict is Verdict.PASS
+    assert got[f"{EX}/answered"].checks[0].detail.startswith("2 exchanges")

@@ -121,9 +121,7 @@ class PassiveExchanges:
             mine = self.keyed.get((id(rule), key), ())
         else:  # replies correlate by addressing alone
             mine = [o for o in self.open[id(rule)] if o.request.src == w.dst or w.dst == self.anyone]
-        # the oldest request not yet answered, else the latest (whose statuses go on)
-        o = next((o for o in mine if not o.answered and self._from_node(o, w)), None) or next(
-            (o for o in reversed(mine) if self._from_node(o, w)), None)
+        o = self._answered_by(mine, w)
         if o is None:
             if rule.echoes:
                 for other in self.open[id(rule)]:
@@ -155,6 +153,16 @@ class PassiveExchanges:
             o.terminal = w
             return [self._finding(o, "terminal", Verdict.PASS, state["clause"], "", w)]
         return []
+
+    def _answered_by(self, mine, w: Watched) -> _Open | None:
+        """The request a reply answers among those it matches: its addressee's before another system's, and the
+        oldest not yet answered before the latest answered (whose statuses go on)."""
+        ours = [o for o in mine if self._from_node(o, w)]
+        for candidates in ([o for o in ours if o.request.src == w.dst], ours):
+            o = next((o for o in candidates if not o.answered), None) or (candidates[-1] if candidates else None)
+            if o is not None:
+                return o
+        return None
 
     def _from_node(self, o: _Open, w: Watched) -> bool:
         return o.request.dst in (None, self.anyone) or w.src == o.request.dst
