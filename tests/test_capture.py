@@ -481,3 +481,9 @@ def test_two_requesters_with_the_same_req_id_are_told_apart():
                    (1, VEHICLE, status("SENT", dst=other)), (2, VEHICLE, status("SENT")), end=30)
     assert got[f"{EX}/to-requester"].verdict is Verdict.PASS
     assert got[f"{EX}/answered"].checks[0].detail.startswith("2 exchanges")
+
+
+def test_a_pcap_whose_link_type_carries_fcs_bits_is_read():
+    head = PCAP_HEADER[:20] + struct.pack("<I", 1 | 0x1 << 28 | 0x1 << 26)  # Ethernet, the F bit and an FCS length
+    result = judge(head + pcap_record(T0, udp(HEARTBEAT)))
+    assert cases(result)["imc/Heartbeat/capture/frame/valid"].verdict is Verdict.PASS

@@ -47,7 +47,7 @@ def records(buf, sections: list[str] | None = None) -> Iterator[Record]:
 def _pcap(buf, e: str, unit: float) -> Iterator[Record]:
     if len(buf) < 24:
         raise CaptureError(f"a truncated pcap header ({len(buf)} of 24 bytes)")
-    linktype = struct.unpack_from(e + "I", buf, 20)[0] & 0x0FFFFFFF  # the upper bits carry FCS flags
+    linktype = struct.unpack_from(e + "I", buf, 20)[0] & 0xFFFF  # the upper bits say whether frames end in an FCS
     unpack, pos, end, number = struct.Struct(e + "IIII").unpack_from, 24, len(buf), 0
     while pos < end:
         number += 1
