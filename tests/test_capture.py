@@ -487,3 +487,15 @@ def test_a_pcap_whose_link_type_carries_fcs_bits_is_read():
     head = PCAP_HEADER[:20] + struct.pack("<I", 1 | 0x1 << 28 | 0x1 << 26)  # Ethernet, the F bit and an FCS length
     result = judge(head + pcap_record(T0, udp(HEARTBEAT)))
     assert cases(result)["imc/Heartbeat/capture/frame/valid"].verdict is Verdict.PASS
+
+
+def test_a_capture_result_is_schema_valid_and_re_renders_byte_for_byte(tmp_path, capsys):
+    from imc_conformance.files import read_result
+    from imc_conformance.render import RENDERERS
+
+    write_capture(tmp_path / "c.pcap", DEFS, SUITE.wire, EDITION, 2000, damaged=0.1)
+    run(tmp_path / "c.pcap", "--adapter", "imcpy", "--list-frames", "2", "--json", tmp_path / "r.json", capsys=capsys)
+    again = read_result(tmp_path / "r.json")  # checked against the result schema
+    assert RENDERERS["json"](again) == (tmp_path / "r.json").read_text(encoding="utf-8")
+    checks = {k.check.split()[0] for c in again.cases for k in c.checks}
+    assert checks == {"count", "frame", "more"}

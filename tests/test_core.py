@@ -109,8 +109,9 @@ def test_a_saved_result_re_renders_byte_for_byte(suite, cases, imcpy_adapter, mo
 
 
 def test_the_core_and_the_case_kinds_name_no_suite():
-    """No module of the core or of a case kind mentions a suite's name; the core imports nothing outside itself."""
-    for path in CORE.parent.glob("kinds/*/*.py"):
+    """No module of the core, of a case kind or of captures mentions a suite's name; the core imports nothing
+    outside itself."""
+    for path in [*CORE.parent.glob("kinds/*/*.py"), *CORE.parent.glob("capture/*.py")]:
         text = path.read_text(encoding="utf-8")
         assert not any(f'"{n}"' in text or f"'{n}'" in text for n in names()), path.name
     for path in CORE.glob("*.py"):
