@@ -11,8 +11,10 @@ import time
 from pathlib import Path
 
 from .capture.judge import CaptureJudge, Selection
-from .capture.recording import read_about
+from .capture.recording import OWN, RECEIVED, read_about, run_ended
 from .capture.records import CaptureError, records
+
+PIPE_LIMIT = 1 << 30  # bytes of a capture read from a pipe or a device
 
 
 def address(text: str) -> str | int:
@@ -112,9 +114,8 @@ def capture_rules(args):
 
 
 def command_pcap(args) -> int:
-    from .cli import adapter_choice, report_targets, terminal, write_reports
+    from .cli import report_targets
     from .usage import UsageError
-    from .render.terminal import print_result
 
     targets = report_targets(args)
     suite, rules, edition = capture_rules(args)
@@ -123,10 +124,23 @@ def command_pcap(args) -> int:
     selection = Selection(frozenset(args.port) or None, frozenset(args.message), args.src, args.dst, args.host,
                           args.start, args.end, args.list_frames, args.time_scale)
     judge = CaptureJudge(suite.name, rules, edition, selection)
-    adapter = args.adapter is not None or args.adapter_cmd is not None
-    if adapter:
-        name, argv = adapter_choice(args, suite)
+    adapter = None  # (name, session)
+    if args.adapter is not None or args.adapter_cmd is not None:  # started first: a mistaken adapter says so at once
+        adapter = started_session(args, suite)
         judge.corpus_limit = args.adapter_frames
+    try:
+        return judged(args, suite, rules, selection, judge, adapter, targets)
+    finally:
+        if adapter is not None:
+            adapter[1].close()
+
+
+def judged(args, suite, rules, selection, judge, adapter, targets) -> int:
+    """Judge the captures, replay a recorded run, decode the frames through an adapter; report; the exit code."""
+    from .cli import terminal, write_reports
+    from .render.terminal import print_result
+    from .usage import UsageError
+
     started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = time.perf_counter()
     damage, complete = [], True
@@ -142,12 +156,13 @@ def command_pcap(args) -> int:
                           notes=damage, complete=complete)
     if judge.about is not None and complete:
         try:
-            merge(result, replay(judge.about, judge.commented, args.strict), list(rules.keys), args.strict)
+            merge(result, replay(judge.about, judge.commented, args.strict, selection.groups,
+                                 judge.recording_complete), list(rules.keys), args.strict)
         except ValueError as exc:
             damage.append(f"the recorded run cannot be replayed: {exc}")
             result.notes.append(damage[-1])
-    if adapter and complete:
-        merge(result, decoded_by(judge, suite, name, argv, args, edition), list(rules.keys), args.strict)
+    if adapter is not None and complete:
+        merge(result, decoded_by(judge, suite, adapter, args), list(rules.keys), args.strict)
     console = terminal()
     print_result(result, console)
     problems = write_reports(result, targets, console)
@@ -159,75 +174,122 @@ def command_pcap(args) -> int:
 
 
 def judge_file(judge: CaptureJudge, path: Path, named: bool) -> list[str]:
-    """Feed every record of the capture at ``path``; the damage found (the records before it are judged)."""
+    """Feed every record of the capture at ``path``; what the reports should say of it (its damage: the records
+    before it are judged; a recorded run's description that cannot be read)."""
+    from .usage import UsageError
+
+    buf = read_capture(path)
+    source, sections, said = f"{path.name} " if named else "", [], []
+    try:
+        for record in records(buf, sections):
+            if sections and judge.about is None and not said:
+                said += recorded_run(judge, path, sections, named)
+            judge.feed(record, source)
+    except CaptureError as exc:
+        if not judge.records:
+            raise UsageError(f"{path}: {exc}") from None
+        return said + [f"{path}: {exc}; the records before it are judged"]
+    finally:
+        if isinstance(buf, mmap.mmap):
+            buf.close()
+    judge.recording_complete = run_ended(sections)
+    return said
+
+
+def recorded_run(judge: CaptureJudge, path: Path, sections: list[str], named: bool) -> list[str]:
+    """Take the run a capture's section describes (``run --pcap``), to replay it; what to say if it cannot be."""
     from .usage import UsageError
 
     try:
-        with path.open("rb") as handle:
-            size = path.stat().st_size
-            if size == 0:
-                raise UsageError(f"{path}: empty file, not a capture")
-            with mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as buf:
-                source = f"{path.name} " if named else ""
-                sections: list[str] = []
-                try:
-                    for record in records(buf, sections):
-                        if sections and judge.about is None and not named:
-                            judge.about = read_about(sections)  # a recorded run (run --pcap): replay it too
-                            judge.keep_commented = judge.about is not None
-                        judge.feed(record, source)
-                except CaptureError as exc:
-                    if not judge.records:
-                        raise UsageError(f"{path}: {exc}") from None
-                    return [f"{path}: {exc}; the records before it are judged"]
-    except OSError as exc:
-        raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from exc
-    except ValueError as exc:  # mmap of something that is not a regular file, a damaged run description
-        raise UsageError(f"cannot read {path}: {exc}") from exc
+        about = read_about(sections)
+    except ValueError as exc:
+        return [f"{path}: {exc}; its frames and exchanges are judged, its scenarios not replayed"]
+    if about is not None and named:
+        raise UsageError(f"{path} is a recorded run (run --pcap): give it alone to replay its scenarios")
+    judge.about, judge.keep_commented = about, about is not None
     return []
 
 
-def replay(about: dict, datagrams: list, strict: bool):
-    """The scenario verdicts of a recorded run, its engine replayed over the recorded datagrams on virtual time
-    (robustness excluded: its restarts and floods cannot be replayed); ValueError if the recording cannot be."""
+def read_capture(path: Path):
+    """The bytes of a capture: a regular file mapped, a pipe or device read (at most PIPE_LIMIT bytes)."""
+    from .usage import UsageError
+
+    try:
+        if str(path) == "-":
+            data = sys.stdin.buffer.read(PIPE_LIMIT + 1)
+        else:
+            with path.open("rb") as handle:
+                if path.is_file() and path.stat().st_size > 0:
+                    return mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ)
+                data = handle.read(PIPE_LIMIT + 1)  # a pipe, a device, a file of /proc
+    except OSError as exc:
+        raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from exc
+    except ValueError as exc:  # mmap refused it
+        raise UsageError(f"cannot read {path}: {exc}") from exc
+    if not data:
+        raise UsageError(f"{path}: empty, not a capture")
+    if len(data) > PIPE_LIMIT:
+        raise UsageError(f"{path}: more than {PIPE_LIMIT >> 20} MB through a pipe or device: write it to a file")
+    return data
+
+
+def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, complete_: bool):
+    """The scenario verdicts of a recorded run (those of ``messages``, when given), its engine replayed over the
+    recorded datagrams on virtual time (robustness excluded: its restarts and floods cannot be replayed);
+    ValueError if the recording cannot be."""
     from .core.runner import run_cases
     from .files import open_corpus
     from .sessions.replay import Recorded, ReplayLink
-    from .suites import load_suite
 
     try:
-        load_suite(about["suite"])
         suite, everything = open_corpus(about["suite"], None)
-        wanted = set(about["cases"])
-        cases = [c for c in everything if c.id in wanted and c.kind == "scenario"]
-        options = {"params": dict(about["params"]), "effects": set(about["effects"]),
-                   "time_scale": float(about["time_scale"]), "profile": suite.profile(about["profile"]),
-                   "robustness": False, "restart": False, "replay_effects": False,
-                   "corpus": tuple(c for c in everything if c.kind == "vector")}
-        if about["claims"] is not None:
-            options["claims"] = set(about["claims"])
-        settings = {"target": str(about["target"]), "src": about["src"], "dst": about["dst"],
-                    "startup": float(about["startup"])}
-        edition = about["edition"]
-    except (KeyError, TypeError, LookupError) as exc:
-        raise ValueError(f"the recorded run's description is damaged ({type(exc).__name__}: {exc})") from None
-    if edition not in suite.editions:
-        raise ValueError(f"the recorded run's edition {edition!r} is not one of the suite's")
+        profile = suite.profile(about["profile"])
+    except (LookupError, ValueError) as exc:
+        raise ValueError(f"the recorded run's suite or profile: {exc}") from None
+    if about["edition"] not in suite.editions:
+        raise ValueError(f"the recorded run's edition {about['edition']!r} is not one of the suite's")
+    wanted = set(about["cases"])
+    cases = [c for c in everything if c.id in wanted and c.kind == "scenario" and (not messages or c.group in messages)]
+    options = {"params": dict(about["params"]), "effects": set(about["effects"]), "time_scale": about["time_scale"],
+               "profile": profile, "robustness": False, "restart": False, "replay_effects": False,
+               "corpus": tuple(c for c in everything if c.kind == "vector")}
+    if about["claims"] is not None:
+        options["claims"] = set(about["claims"])
     if not datagrams:
         raise ValueError("no datagram of the run is in the capture")
     t0 = datagrams[0].time
     recording = [Recorded(d.time - t0, (d.src, d.sport), (d.dst, d.dport), d.payload, d.comment) for d in datagrams]
-    sent = next((r for r in recording if r.comment not in ("received", "the session's own")), recording[0])
-    link = ReplayLink(recording, target=sent.dst, address=sent.src, epoch0=t0)
-    session = suite.open_replay(link, **settings)
-    return run_cases(session, suite, cases, edition=edition, adapter=settings["target"], strict=strict,
-                     options=options, clock=link.now, started=_iso(t0))
+    sent = next((r for r in recording if r.comment not in (RECEIVED, OWN)), recording[0])
+    link = ReplayLink(recording, target=sent.dst, address=sent.src, epoch0=t0, complete=complete_)
+    session = suite.open_replay(link, target=about["target"], src=about["src"], dst=about["dst"],
+                                startup=about["startup"])
+    result = run_cases(session, suite, cases, edition=about["edition"], adapter=about["target"], strict=strict,
+                       options=options, clock=link.now, started=_iso(t0))
+    if not result.complete:
+        result.notes.insert(0, "the recording ends before its run did (interrupted, or the file cut): only the "
+                               "scenarios that finished within it are replayed")
+    return result
 
 
-def decoded_by(judge: CaptureJudge, suite, name: str, argv, args, edition: str):
+def started_session(args, suite):
+    """(name, session) of the adapter that decodes the captured frames, started and greeted; usage errors if not."""
+    from .cli import adapter_choice, open_session
+    from .core.session import AdapterStartError
+    from .usage import UsageError
+
+    name, argv = adapter_choice(args, suite)
+    session = open_session(name, argv, args, suite)
+    try:
+        session.hello()
+    except AdapterStartError as exc:
+        session.close()
+        raise UsageError(str(exc)) from exc
+    return name, session
+
+
+def decoded_by(judge: CaptureJudge, suite, adapter: tuple, args):
     """The capture as a corpus: each distinct frame decoded by the implementation, judged as a vector case whose
     verdict is the reference codec's."""
-    from .cli import open_session
     from .usage import UsageError
     from .core.cases import Case
     from .core.runner import run_cases
@@ -235,18 +297,16 @@ def decoded_by(judge: CaptureJudge, suite, name: str, argv, args, edition: str):
 
     cases = []
     for data, (group, number) in judge.corpus.items():
-        case = judge.rules.vector_case(group, data, number, edition)
+        case = judge.rules.vector_case(group, data, number, judge.edition)
         if case is not None:
             cases.append(Case(case["id"], group, "vector", case))
     notes = [f"{len(cases):,} distinct frames decoded by the adapter"
              + (f"; {judge.corpus_left:,} more not (--adapter-frames)" if judge.corpus_left else "")]
-    session = open_session(name, argv, args, suite)
     try:
-        result = run_cases(session, suite, cases, edition=edition, adapter=name, strict=args.strict, notes=notes)
+        result = run_cases(adapter[1], suite, cases, edition=judge.edition, adapter=adapter[0], strict=args.strict,
+                           notes=notes)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
-    finally:
-        session.close()
     for m in result.messages:
         m.cases = collapsed(m.cases, {c.id: c.data for c in cases}, args.list_frames)
     return result

@@ -156,6 +156,8 @@ def command_run(args) -> int:
     if not cases:
         raise UsageError("the selection matches no case")
     if args.dry_run:
+        if args.pcap:
+            raise UsageError("--pcap records what a run sends and receives; --dry-run sends nothing")
         return live.dry_run(suite, cases, args, options)
     waivers, notes = {}, []
     if args.waivers:
@@ -168,7 +170,10 @@ def command_run(args) -> int:
     try:
         session = live.open_target(args, suite, recorder) if args.target else open_session(name, argv, args, suite)
     except ValueError as exc:
+        if recorder is not None:
+            recorder.close(complete=False)
         raise UsageError(str(exc)) from exc
+    result = None
     try:
         with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       console=Console(stderr=True), transient=True, disable=args.no_progress) as bar:
@@ -181,7 +186,7 @@ def command_run(args) -> int:
     finally:
         session.close()
         if recorder is not None:
-            recorder.close()
+            recorder.close(complete=result is not None and result.complete)
     print_result(result, console)
     if recorder is not None:
         console.print(f"pcapng of the exchange ({recorder.count} datagrams): {printable(str(args.pcap))}",

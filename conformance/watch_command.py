@@ -50,7 +50,11 @@ def command_watch(args) -> int:
     if args.source:  # everything sent to the watched socket is judged, whatever its port
         selection.ports = frozenset([listen.address[1]])
     judge = CaptureJudge(suite.name, rules, edition, selection)
-    what = args.source or f"interface {args.iface}"
+    if args.source:
+        host, port = listen.address[:2]
+        what = f"udp://{f'[{host}]' if ':' in host else host}:{port}"  # the port bound, where 0 was asked
+    else:
+        what = f"interface {args.iface}"
     started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = time.monotonic()
     end = began + args.duration if args.duration else float("inf")
@@ -60,8 +64,7 @@ def command_watch(args) -> int:
             if isinstance(item, Record):
                 judge.feed(item)
             else:
-                judge.records += 1
-                judge.feed_datagram(item)
+                judge.received(item)
 
     stopping: list[int] = []  # Ctrl-C or SIGTERM: finish the datagrams in hand, then stop
     handlers = {sig: signal.signal(sig, lambda signum, frame: stopping.append(signum))
@@ -77,7 +80,7 @@ def command_watch(args) -> int:
             signal.signal(sig, handler)
         judge_all(listen.stop())  # what arrived before the stop is judged too
     result = judge.result(implementation=what, started=started, duration=round(time.monotonic() - began, 3),
-                          strict=args.strict, title=suite.title)
+                          strict=args.strict, title=suite.title, until=time.time())
     print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
 
@@ -153,9 +156,9 @@ def open_socket(url: str) -> SocketListener:
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
     why = group_address(address[0])
-    if why:
-        raise UsageError(f"watch {url}: {why}; watch binds a unicast address and never joins a group "
-                         "(use --iface to see a group's traffic)")
+    if why and why != "the unspecified address":  # 0.0.0.0 or :: binds the port on every local address: allowed
+        raise UsageError(f"watch {url}: {why}; watch binds a port of this host and never joins a group "
+                         "(--iface sees all the traffic of an interface)")
     try:
         sock = bound_socket(family, address, f"watch {url}")
     except ValueError as exc:

@@ -349,7 +349,7 @@ def test_filters_by_address_and_time(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("content, message", [
-    (b"", "empty file, not a capture"),
+    (b"", "empty, not a capture"),
     (b"hello world, not a capture", "not a pcap or pcapng capture (it starts 68656c6c)"),
     (PCAP_HEADER[:10], "a truncated pcap header (10 of 24 bytes)"),
     (PCAP_HEADER + b"\x00" * 20, "record 1 claims 0 bytes"),
@@ -499,3 +499,105 @@ def test_a_capture_result_is_schema_valid_and_re_renders_byte_for_byte(tmp_path,
     assert RENDERERS["json"](again) == (tmp_path / "r.json").read_text(encoding="utf-8")
     checks = {k.check.split()[0] for c in again.cases for k in c.checks}
     assert checks == {"count", "frame", "more"}
+
+
+# ---------------------------------------------------------------- found in review
+
+def test_filters_never_hide_a_reply_from_the_exchange_rules():
+    query = frame("AcousticSystemsQuery", {}, STATION, VEHICLE)
+    answer = frame("AcousticSystems", {"list": "p"}, VEHICLE, STATION)
+    buf = pcap([(0, udp(query)), (1, udp(answer, ("10.0.0.30", 6002), ("10.0.0.1", 6001))), (20, udp(HEARTBEAT))])
+    answered = "imc/AcousticSystemsQuery/capture/exchange/acoustic-systems/answered"
+    assert cases(judge(buf))[answered].verdict is Verdict.PASS
+    assert cases(judge(buf, src="10.0.0.1"))[answered].verdict is Verdict.PASS  # the reply is still followed
+    assert cases(judge(buf, dst=VEHICLE))[answered].verdict is Verdict.PASS
+    assert cases(judge(buf, end=0.5))[answered].verdict is Verdict.INCONCLUSIVE  # the window ends first
+    narrowed = judge(buf, src="10.0.0.1")
+    assert narrowed.notes[0].startswith("3 records, 2 datagrams on the ports judged")  # the reply is not counted
+
+
+def test_a_requesters_own_resend_to_anyone_is_no_answer():
+    clear = frame("HistoricDataQuery", {"req_id": 5, "type": named("HistoricDataQuery", "type", "CLEAR"),
+                                        "max_size": 0, "data": None}, STATION, 0xFFFF)
+    got = exchange((0, STATION, clear), (1, STATION, clear + b""), end=30)
+    case = got["imc/HistoricDataQuery/capture/exchange/historic-data-clear/answered"]
+    assert case.verdict is not Verdict.PASS
+
+
+def test_an_interface_description_without_a_body_is_damage_not_a_crash():
+    damaged = (b"\x0a\x0d\x0d\x0a" + struct.pack("<I", 28) + b"\x4d\x3c\x2b\x1a" + struct.pack("<HHq", 1, 0, -1)
+               + struct.pack("<I", 28) + struct.pack("<II", 1, 12) + struct.pack("<I", 12))
+    with pytest.raises(CaptureError, match="an interface description before record 1 is damaged"):
+        list(records(damaged))
+
+
+def test_frame_numbers_count_the_blocks_wireshark_numbers(tmp_path):
+    writer = PcapNgWriter(str(tmp_path / "c.pcapng"))
+    writer.write(Ether() / INNER)
+    writer.close()
+    data = (tmp_path / "c.pcapng").read_bytes()
+    custom = struct.pack("<II", 0x40000BAD, 16) + struct.pack("<I", 32473) + struct.pack("<I", 16)
+    got = [r.number for r in records(data + custom + data[data.index(struct.pack("<I", 6)):])]
+    assert got == [1, 3]  # the custom block is frame 2 in Wireshark
+
+
+def test_written_records_keep_their_second_and_zones_are_not_on_the_wire():
+    from imc_conformance.capture.writing import ip_udp
+
+    record = pcap_record(1_700_000_000.9999996, b"x")
+    assert struct.unpack_from("<II", record) == (1_700_000_001, 0)
+    assert ip_udp("fe80::1%eth0", 5000, "fe80::2%eth0", 6002, b"x")[8:24] == __import__("socket").inet_pton(
+        __import__("socket").AF_INET6, "fe80::1")
+
+
+def test_a_frame_nested_beyond_the_codec_is_inconclusive_not_a_crash():
+    inner = None
+    for _ in range(400):  # RemoteCommands in RemoteCommands: valid IMC, deeper than Python recursion goes
+        inner = {"abbrev": "RemoteCommand", "fields": {"original_source": 1, "destination": 2, "timeout": 0.0,
+                                                       "cmd": inner}}
+    data = bytearray(frame("RemoteCommand", {"original_source": 1, "destination": 2, "timeout": 0.0, "cmd": None},
+                           VEHICLE, STATION))
+    nested = b""
+    for _ in range(400):
+        nested = struct.pack("<HHHd", 188, 1, 2, 0.0) + nested
+    payload = data[20:-2 - 2] + nested + struct.pack("<H", 0xFFFF)
+    body = bytes(data[:4]) + struct.pack("<H", len(payload)) + bytes(data[6:20]) + payload
+    from imc_conformance.suites.imc.crc16 import crc16
+    whole = body + struct.pack("<H", crc16(body))
+    case = cases(judge(pcap([(0, udp(whole))])))["imc/RemoteCommand/capture/frame/nested-too-deep"]
+    assert case.verdict is Verdict.INCONCLUSIVE
+
+
+def test_a_capture_read_from_standard_input(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    command = [str(Path(sys.executable).parent / "imc-conformance"), "pcap", "-", "--json", str(tmp_path / "r.json")]
+    done = subprocess.run(command, input=pcap([(0, udp(HEARTBEAT))]), capture_output=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["messages"][0]["cases"][0]["id"] == "imc/Heartbeat/capture/frame/valid"
+
+
+def test_a_watch_judges_exchanges_until_it_stops():
+    j = CaptureJudge("imc", SUITE.capture_rules(), EDITION, Selection())
+    for record in records(pcap([(0, udp(frame("AcousticSystemsQuery", {}, STATION, VEHICLE)))])):
+        j.feed(record)
+    result = j.result(implementation="w", started="x", duration=0.0, strict=False, title="IMC", until=T0 + 30)
+    answered = cases(result)["imc/AcousticSystemsQuery/capture/exchange/acoustic-systems/answered"]
+    assert answered.verdict is Verdict.FAIL  # 30 s of watching saw no answer within 5 s
+
+
+def test_many_small_fragments_are_put_together_once():
+    big = frame("AcousticSystems", {"list": "z" * 4000}, VEHICLE, STATION)
+    parts = fragment(IP(src="10.0.0.30", dst="10.0.0.1", id=9) / UDP(sport=6002, dport=6001) / Raw(big), fragsize=8)
+    result = judge(pcap([(0, (Ether() / p).build()) for p in reversed(parts)]))
+    assert cases(result)["imc/AcousticSystems/capture/frame/valid"].checks[0].detail.startswith("1 frame")
+    assert f"{len(parts) - 1:,} not judged: IP fragments (judged once their datagram is whole)" in result.notes
+
+
+def test_a_request_echoed_back_from_its_addressee_is_no_new_request():
+    got = exchange((0, STATION, request(7)), (0.5, VEHICLE, status("SENT")), (1, VEHICLE, request(7)), end=40)
+    assert got[f"{EX}/answered"].verdict is Verdict.PASS  # DUNE's router sends a request back to its sender
+    assert got[f"{EX}/answered"].checks[0].detail.startswith("1 exchange ")

@@ -10,16 +10,21 @@ import subprocess
 
 import pytest
 
-from imc_conformance.capture.recording import Recorder, about_run
+from imc_conformance.capture.datagrams import Dissector
+from imc_conformance.capture.recording import ABOUT, Recorder, about_run
 from imc_conformance.capture.records import records
-from imc_conformance.capture.writing import PCAP_HEADER, pcap_record
+from imc_conformance.capture.writing import PCAP_HEADER, PcapNgWriter, pcap_record
 from imc_conformance.cli import main
 from imc_conformance.files import open_corpus
+from imc_conformance.suites import load_suite
+from imc_conformance.suites.imc import codec
 from imc_conformance.suites.imc.node.breaks import BREAKS
 
 from live_harness import EVERYTHING, run_virtual
 
 EDITION = "imc-5.4.30"
+HEARTBEAT_FRAME = codec.encode(load_suite("imc").defs, {"abbrev": "Heartbeat", "fields": {}, "header": {
+    "timestamp": 1.0, "src": 0xA0, "src_ent": 1, "dst": 0x4CF0, "dst_ent": 255}})
 # the broken nodes the passive exchange rules must catch, with the case that catches each
 PASSIVE = {
     "req-id-not-echoed": "imc/AcousticRequest/capture/exchange/acoustic-request/echo-req_id",
@@ -47,7 +52,7 @@ def record(corpus, path, **node):
     try:
         result, _ = run_virtual(suite, everything, edition=EDITION, options=options, recorder=recorder, **node)
     finally:
-        recorder.close()
+        recorder.close(complete=True)
     return result
 
 
@@ -98,9 +103,13 @@ def test_a_damaged_run_description_is_one_line(corpus, tmp_path, capsys):
     record(corpus, path)
     data = path.read_bytes().replace(b'"cases": [', b'"casez": [', 1)  # the same length: the blocks stay whole
     path.write_bytes(data)
-    assert main(["pcap", str(path)]) == 2
+    assert main(["pcap", str(path), "--json", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
-    assert "the recorded run's description is damaged: no list of cases" in err and "Traceback" not in err
+    assert "the recorded run's description is damaged: cases is not a list; its frames and exchanges are judged" in err
+    assert "Traceback" not in err
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert not [c for m in doc["messages"] for c in m["cases"] if "/scenario/" in c["id"]]
+    assert any(c["id"].endswith("/capture/frame/valid") for m in doc["messages"] for c in m["cases"])
 
 
 @pytest.mark.skipif(shutil.which("tshark") is None, reason="tshark is not installed (.ci/run installs Debian's)")
@@ -126,3 +135,65 @@ def test_a_recording_that_cannot_be_made_is_one_line(argv, message, capsys, tmp_
     assert main(["run", *argv]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
+
+
+def test_an_interrupted_recording_replays_only_what_finished(corpus, tmp_path):
+    whole = tmp_path / "run.pcapng"
+    live = record(corpus, whole)
+    sections: list[str] = []
+    kept = list(records(whole.read_bytes(), sections))
+    half = tmp_path / "half.pcapng"  # the first 20 s, as a run stopped there leaves it (no closing comment)
+    with half.open("wb") as handle:
+        writer = PcapNgWriter(handle, sections[0])
+        for r in kept:
+            if r.time - kept[0].time <= 20:
+                d = Dissector().datagram(r)
+                writer.write(r.time, (d.src, d.sport), (d.dst, d.dport), d.payload, r.comment)
+    code, doc = judged(half, tmp_path)
+    replayed = verdicts(doc, "/scenario/")
+    before = verdicts(live, "/scenario/")
+    assert 0 < len(replayed) < len(before) and all(before[k] == v for k, v in replayed.items())
+    assert any(n.startswith("the recording ends before its run did") for n in doc["notes"])
+    assert code == 0
+
+
+def test_a_robustness_recording_judges_the_node_not_the_sessions_own_frames(corpus, tmp_path):
+    suite, everything = corpus
+    options = dict(EVERYTHING, time_scale=1.0, profile=suite.profile("seed"))
+    ids = [c.id for c in everything if c.kind == "scenario"]
+    path = tmp_path / "rob.pcapng"
+    recorder = Recorder(path, about_run("imc", EDITION, ids, options, "udp://127.0.0.1:6002", None, None, 10.0))
+    try:
+        live, _ = run_virtual(suite, everything, edition=EDITION, options=options, recorder=recorder,
+                              kinds=("scenario", "robustness"))
+    finally:
+        recorder.close(complete=True)
+    code, doc = judged(path, tmp_path)
+    assert set(verdicts(live, "").values()) == {"PASS"}
+    assert code == 0 and set(verdicts(doc, "/capture/").values()) == {"PASS"}
+    assert any("datagrams the session sent on purpose in its robustness phase" in n for n in doc["notes"])
+    assert verdicts(doc, "/scenario/") == verdicts(live, "/scenario/")
+
+
+@pytest.mark.parametrize("change", [{"time_scale": float("inf")}, {"time_scale": 1e300}, {"time_scale": 0},
+                                    {"startup": float("nan")}, {"src": 70000}, {"params": []}, {"edition": 5},
+                                    {"suite": "nope"}, {"profile": "nope"}, {"claims": "acoustic"}, {"cases": [1]}])
+def test_a_hostile_run_description_is_refused_and_the_frames_still_judged(change, tmp_path, capsys):
+    about = about_run("imc", EDITION, ["imc/Heartbeat/scenario/alive"], {"profile": {"name": "seed"}},
+                      "udp://127.0.0.1:6002", None, None, 10.0) | change
+    path = tmp_path / "hostile.pcapng"
+    with path.open("wb") as handle:
+        writer = PcapNgWriter(handle, ABOUT + json.dumps(about))
+        writer.write(1.7e9, ("127.0.0.1", 6002), ("127.0.0.1", 6001), HEARTBEAT_FRAME, "received")
+    code = main(["pcap", str(path), "--json", str(tmp_path / "r.json")])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err
+    assert "cannot be replayed" in err or "description is damaged" in err
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert [c["id"] for m in doc["messages"] for c in m["cases"]] == ["imc/Heartbeat/capture/frame/valid"]
+
+
+def test_a_dry_run_records_nothing(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "--target", "udp://127.0.0.1:9", "--dry-run", "--pcap", "dry.pcapng"]) == 2
+    assert "--dry-run sends nothing" in capsys.readouterr().err

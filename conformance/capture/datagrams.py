@@ -71,7 +71,7 @@ class Dissector:
                 return "a fragment cut by the capture"
             body = self._reassemble((src, dst, ident, 4), offset, more, body)
             if body is None:
-                return "a fragment held for reassembly"
+                return "IP fragments (judged once their datagram is whole)"
         return _udp(record, src, dst, body, cut)
 
     def _ipv6(self, record: Record, p: bytes) -> Datagram | str:
@@ -100,20 +100,22 @@ class Dissector:
                 return "a fragment cut by the capture"
             body = self._reassemble((src, dst, fragment[2], 6), fragment[0], fragment[1], body)
             if body is None:
-                return "a fragment held for reassembly"
+                return "IP fragments (judged once their datagram is whole)"
         return _udp(record, src, dst, body, cut)
 
     def _reassemble(self, key: tuple, offset: int, more: bool, body: bytes) -> bytes | None:
         """The whole datagram once every fragment of ``key`` is in, else None."""
-        held = self.held.setdefault(key, {"parts": {}, "end": None})
+        held = self.held.setdefault(key, {"parts": {}, "end": None, "have": 0})
+        if offset not in held["parts"]:
+            held["have"] += len(body)
         held["parts"][offset] = body
         if not more:
             held["end"] = offset + len(body)
         if len(self.held) > HELD_LIMIT:
             self.held.popitem(last=False)
             self.given_up += 1
-        if held["end"] is None:
-            return None
+        if held["end"] is None or held["have"] < held["end"]:
+            return None  # not every byte can be in yet: put it together only when it can be whole
         whole, pos = bytearray(), 0
         for start in sorted(held["parts"]):
             if start > pos:

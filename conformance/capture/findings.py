@@ -23,6 +23,7 @@ class Frame:
     fields: dict | None = None
     src: int | None = None  # the sender's and the addressee's system ids, where the frame gives them
     dst: int | None = None
+    undecided: bool = False  # ``rule`` says why the frame could not be judged (INCONCLUSIVE), not what it breaks
 
 
 @dataclass(slots=True)

@@ -13,6 +13,7 @@ from ..core.results import CaseResult, CheckResult, MessageResult, RunResult, me
 from ..core.verdicts import Verdict, worst
 from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched
+from .recording import OWN, RECEIVED
 from .records import Record
 
 FRAME_CLAUSE = "the byte rules of the suite's corpus (rules.json)"
@@ -58,6 +59,7 @@ class CaptureJudge:
         self.records = self.datagrams = 0
         self.valid: dict[str, list[int]] = {}  # group -> [valid frames, first, last]
         self.source = ""  # the file being judged, when there are several
+        self.sources: set[str] = set()
         self.corpus_limit = 0  # distinct frames kept to replay through an implementation (pcap --adapter)
         self.corpus: dict[bytes, tuple[str, int]] = {}  # frame -> (group, its first frame number)
         self.corpus_left = 0  # distinct frames beyond the limit
@@ -65,6 +67,8 @@ class CaptureJudge:
         self.duplicates = 0
         self.about: dict | None = None  # the recorded run the capture holds (run --pcap), if any
         self.keep_commented = False  # keep the datagrams that carry a comment (a recorded run, to replay)
+        self.recording_complete = False  # the recorded run ended (it was not interrupted, the file is whole)
+        self.flood: float | None = None  # when a recorded run's robustness phase began
         self.commented: list[Datagram] = []
         self.groups = selection.groups
         self.filtered = any(v is not None for v in (selection.src, selection.dst, selection.host, selection.start,
@@ -84,6 +88,11 @@ class CaptureJudge:
             return
         self.feed_datagram(got, source)
 
+    def received(self, got: Datagram) -> None:
+        """Judge a datagram a socket received (each is a record of its own)."""
+        self.records += 1
+        self.feed_datagram(got)
+
     def feed_datagram(self, got: Datagram, source: str = "") -> None:
         """Judge one UDP datagram (one a socket received, or one found in a record)."""
         if self.origin is None:
@@ -91,50 +100,43 @@ class CaptureJudge:
         if got.time > self.last:
             self.last = got.time
         self.source = source
+        self.sources.add(source)
         recorded = got.comment is not None and self.keep_commented  # a datagram of a recorded run: on its ports
-        if recorded:
+        # what a recorded run's robustness phase sent on purpose (corpus frames, garbage, probes): its frames are
+        # not the node's to judge, but the node answers its requests
+        deliberate = recorded and got.comment not in (RECEIVED, OWN) and got.comment.split(" ", 1)[0] not in \
+            self.about["cases"]
+        if recorded and not deliberate:
             self.commented.append(got)
+        if deliberate and self.flood is None:
+            self.flood = got.time  # from here on the node answers the flood: no exchanges to follow
         if not recorded and got.sport not in self.ports and got.dport not in self.ports:
             self.skipped["UDP on other ports"] += 1
             return
-        if self.filtered and not self._selected(got):
+        if self.filtered and not self._in(got, frames=False):  # outside the window or the host: unseen
             self.skipped["outside the selection"] += 1
             return
-        self.datagrams += 1
         frame = self.rules.frame(got.payload)
-        if frame is None:
+        if deliberate:
+            self.skipped["datagrams the session sent on purpose in its robustness phase"] += 1
+        elif frame is None:
             self.skipped["datagrams on the ports that are not frames of the suite"] += 1
+        elif frame.group is None:
+            self.outside[frame.outside] += 1
+        if frame is None or frame.group is None:
             return
         group = frame.group
-        if group is None:
-            self.outside[frame.outside] += 1
-            return
-        if self.filtered and not self._addressed(frame.src, frame.dst):
+        if self.filtered and not self._addressed(frame.src, frame.dst, frames=False):
             self.skipped["outside the selection"] += 1
             return
-        if (self.corpus_limit and not got.cut and (not self.groups or group in self.groups)
-                and got.payload not in self.corpus):
-            if len(self.corpus) < self.corpus_limit:
-                self.corpus[got.payload] = (group, got.number)
-            else:
-                self.corpus_left += 1
-        if self.groups and group not in self.groups:
+        # --src, --dst and --message narrow the frames judged; the exchanges are followed through all the rest
+        shown = (not self.groups or group in self.groups) and (not self.filtered or (
+            self._in(got, frames=True) and self._addressed(frame.src, frame.dst, frames=True)))
+        if shown and not deliberate:
+            self._judge_frame(group, frame, got)
+        elif not deliberate:
             self.skipped["outside the selection"] += 1
-        elif got.cut:
-            self._tally(Finding(group, "frame/truncated-by-capture", Verdict.INCONCLUSIVE, FRAME_CLAUSE,
-                                f"{len(got.payload)} bytes captured: the capture's snaplen cut the datagram",
-                                got.number, got.time, got.payload, got))
-        elif frame.rule is not None:
-            self._tally(Finding(group, f"frame/{frame.rule}", Verdict.FAIL, frame.clause,
-                                f"byte {frame.offset}: {frame.detail}", got.number, got.time, got.payload, got))
-        else:
-            valid = self.valid.get(group)
-            if valid is None:
-                self.valid[group] = [1, got.number, got.number]
-            else:
-                valid[0] += 1
-                valid[2] = got.number
-        if frame.fields is not None and frame.rule is None and not got.cut:
+        if frame.fields is not None and frame.rule is None and not got.cut and self.flood is None:
             if got.payload in self.recent:  # the network duplicated it: one frame for the exchanges
                 self.duplicates += 1
                 return
@@ -146,10 +148,40 @@ class CaptureJudge:
                 if not self.groups or finding.group in self.groups:
                     self._tally(finding)
 
+    def _judge_frame(self, group: str, frame, got: Datagram) -> None:
+        """Tally a frame's verdict (and keep it for the corpus an adapter decodes)."""
+        self.datagrams += 1
+        if self.corpus_limit and not got.cut and got.payload not in self.corpus:
+            if len(self.corpus) < self.corpus_limit:
+                self.corpus[got.payload] = (group, got.number)
+            else:
+                self.corpus_left += 1
+        if got.cut:
+            self._tally(Finding(group, "frame/truncated-by-capture", Verdict.INCONCLUSIVE, FRAME_CLAUSE,
+                                f"{len(got.payload)} bytes captured: the capture's snaplen cut the datagram",
+                                got.number, got.time, got.payload, got))
+        elif frame.rule is not None:
+            self._tally(Finding(group, f"frame/{frame.rule}", Verdict.INCONCLUSIVE if frame.undecided else Verdict.FAIL,
+                                frame.clause, f"byte {frame.offset}: {frame.detail}", got.number, got.time,
+                                got.payload, got))
+        else:
+            valid = self.valid.get(group)
+            if valid is None:
+                self.valid[group] = [1, got.number, got.number]
+            else:
+                valid[0] += 1
+                valid[2] = got.number
+
     def result(self, *, implementation: str, started: str, duration: float, strict: bool, title: str,
-               notes: list[str] = (), complete: bool = True) -> RunResult:
-        for finding in self.tracker.finish(self.last):
-            if not self.selection.groups or finding.group in self.selection.groups:
+               notes: list[str] = (), complete: bool = True, until: float | None = None) -> RunResult:
+        """The run result; ``until``: when watching ended (default: the last record, or the window's end)."""
+        end = self.last if until is None else max(self.last, until)
+        if self.selection.end is not None and self.origin is not None:
+            end = min(end, self.origin + self.selection.end)
+        if self.flood is not None:
+            end = min(end, self.flood)
+        for finding in self.tracker.finish(end):
+            if not self.groups or finding.group in self.groups:
                 self._tally(finding)
         for group, (n, first, last) in self.valid.items():
             tally = self.tallies.setdefault((group, "frame/valid"), _Tally(FRAME_CLAUSE))
@@ -158,10 +190,8 @@ class CaptureJudge:
         groups: dict[str, list[CaseResult]] = {}
         for (group, case), tally in sorted(self.tallies.items()):
             groups.setdefault(group, []).append(self._case(group, case, tally))
-        order = list(self.rules.keys)
         messages = [MessageResult(name, self.rules.keys.get(name, "-"), message_verdict(cases, strict), cases)
-                    for name, cases in sorted(groups.items(), key=lambda kv: (
-                        order.index(kv[0]) if kv[0] in order else len(order), kv[0]))]
+                    for name, cases in self._in_order(groups)]
         return RunResult(self.suite, title, self.edition, implementation, "capture", strict, started, duration,
                          messages, "", list(notes) + self.notes(), complete)
 
@@ -172,9 +202,12 @@ class CaptureJudge:
             bad = sum(n for v, n in tally.counts.items() if v is not Verdict.PASS)
             row = rows.setdefault(group, [0, 0, 0])
             row[1 if case.startswith("frame/") else 2] += bad
-        order = list(self.rules.keys)
-        return [(g, *row) for g, row in sorted(rows.items(), key=lambda kv: (
-            order.index(kv[0]) if kv[0] in order else len(order), kv[0]))]
+        return [(g, *row) for g, row in self._in_order(rows)]
+
+    def _in_order(self, by_group: dict) -> list[tuple]:
+        """The items of a dict by group, in the suite's order of its groups."""
+        order = {name: i for i, name in enumerate(self.rules.keys)}
+        return sorted(by_group.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0]))
 
     def notes(self) -> list[str]:
         out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged"
@@ -183,7 +216,12 @@ class CaptureJudge:
             top = ", ".join(f"{name} ({n:,})" for name, n in self.outside.most_common(8))
             out.append(f"{sum(self.outside.values()):,} frames of {len(self.outside)} messages the suite does not "
                        f"cover (framing checked only): {top}{' ...' if len(self.outside) > 8 else ''}")
+        if not self.tallies and not self.valid:
+            out.append("no frame of the suite was judged: none on the ports (--port names others) or in the selection")
         out += [f"{n:,} not judged: {why}" for why, n in self.skipped.most_common()]
+        if self.flood is not None:
+            out.append(f"the exchanges are followed until the recorded run's robustness phase began, "
+                       f"{self.flood - self.origin:.3f} s in (its flood and the node's answers to it are not exchanges)")
         if self.duplicates:
             out.append(f"{self.duplicates:,} datagrams identical to one shortly before (duplicated by the network) "
                        "were judged once by the exchange rules")
@@ -210,7 +248,8 @@ class CaptureJudge:
     def _case(self, group: str, case: str, tally: _Tally) -> CaseResult:
         noun = "frame" if case.startswith("frame/") else "exchange"
         checks = [CheckResult("count", verdict, f"{n:,} {noun}{'s' if n != 1 else ''}" + (
-            f" (frames {tally.first} to {tally.last})" if verdict is Verdict.PASS and tally.first else ""))
+            f" (frames {tally.first} to {tally.last})" if verdict is Verdict.PASS and tally.first
+            and len(self.sources) == 1 else ""))
                   for verdict, n in sorted(tally.counts.items(), key=lambda kv: kv[0].value)]
         for f in tally.listed:
             at = f"{f.time - self.origin:.6f} s" if f.time is not None and self.origin is not None else "-"
@@ -224,23 +263,22 @@ class CaptureJudge:
         return CaseResult(f"{self.suite}/{group}/capture/{case}", group, worst(tally.counts), None, tally.clause,
                           checks, rule)
 
-    def _selected(self, d: Datagram) -> bool:
+    def _in(self, d: Datagram, frames: bool) -> bool:
+        """Whether a datagram is within the window and from or to the host (and, for ``frames``, from --src and
+        to --dst, where those are addresses)."""
         s = self.selection
         if s.start is not None and self.origin is not None and d.time - self.origin < s.start:
             return False
         if s.end is not None and self.origin is not None and d.time - self.origin > s.end:
             return False
-        for want, have in ((s.src, (d.src,)), (s.dst, (d.dst,)), (s.host, (d.src, d.dst))):
-            if isinstance(want, str) and want not in have:
-                return False
-        return True
+        wanted = ((s.host, (d.src, d.dst)),) + (((s.src, (d.src,)), (s.dst, (d.dst,))) if frames else ())
+        return all(not isinstance(want, str) or want in have for want, have in wanted)
 
-    def _addressed(self, src: int | None, dst: int | None) -> bool:
+    def _addressed(self, src: int | None, dst: int | None, frames: bool) -> bool:
+        """The same, where the host, --src or --dst are system ids."""
         s = self.selection
-        for want, have in ((s.src, (src,)), (s.dst, (dst,)), (s.host, (src, dst))):
-            if isinstance(want, int) and want not in have:
-                return False
-        return True
+        wanted = ((s.host, (src, dst)),) + (((s.src, (src,)), (s.dst, (dst,))) if frames else ())
+        return all(not isinstance(want, int) or want in have for want, have in wanted)
 
 
 def _place(d: Datagram, source: str) -> str:

@@ -6,10 +6,14 @@ the scenario engine over it."""
 from __future__ import annotations
 
 import json
+import math
+import time
 
 from .writing import PcapNgWriter
 
 ABOUT = "imc-conformance run "
+COMPLETE = "imc-conformance run complete"  # the last comment of a run that was not interrupted
+RECEIVED, OWN = "received", "the session's own"  # the comments of what the session received, and of its manners
 
 
 class Recorder:
@@ -22,8 +26,12 @@ class Recorder:
     def record(self, epoch: float, src: tuple, dst: tuple, data: bytes, comment: str) -> None:
         self.writer.write(epoch, src, dst, bytes(data), comment)
         self.count += 1
+        self.last = epoch
 
-    def close(self) -> None:
+    def close(self, complete: bool) -> None:
+        """Close the file; a run that ended, not one interrupted, says so in its last comment."""
+        if complete:
+            self.writer.close(getattr(self, "last", time.time()), COMPLETE)
         self.handle.close()
 
 
@@ -38,14 +46,48 @@ def about_run(suite: str, edition: str, case_ids: list[str], options: dict, targ
 
 def read_about(sections: list[str]) -> dict | None:
     """The run a capture's section comments describe, if it was written by ``run --pcap``; ValueError if the
-    comment is there but damaged."""
+    comment is there but damaged (a value of the wrong kind or out of range)."""
     for text in sections:
-        if text.startswith(ABOUT):
+        if text.startswith(ABOUT) and text != COMPLETE:
             try:
                 about = json.loads(text[len(ABOUT):])
             except json.JSONDecodeError as exc:
                 raise ValueError(f"the recorded run's description is damaged: {exc}") from None
-            if not isinstance(about, dict) or not isinstance(about.get("cases"), list):
-                raise ValueError("the recorded run's description is damaged: no list of cases")
+            problem = _problem(about)
+            if problem:
+                raise ValueError(f"the recorded run's description is damaged: {problem}")
             return about
+    return None
+
+
+def run_ended(sections: list[str]) -> bool:
+    """Whether the recorded run ended (it was not interrupted, and the file is whole)."""
+    return COMPLETE in sections
+
+
+def _problem(about) -> str | None:
+    """What is wrong in a run's description, or None."""
+    if not isinstance(about, dict):
+        return "not an object"
+    kinds = {"suite": str, "edition": str, "target": str, "profile": str, "cases": list, "params": dict,
+             "effects": list}
+    for key, kind in kinds.items():
+        if not isinstance(about.get(key), kind):
+            return f"{key} is not a {kind.__name__}"
+    if not all(isinstance(c, str) for c in about["cases"] + about["effects"]):
+        return "cases and effects must be lists of text"
+    if not all(isinstance(v, (str, int, float)) and not isinstance(v, bool) for v in about["params"].values()):
+        return "params must map names to text or numbers"
+    for key in ("src", "dst"):
+        value = about.get(key)
+        if value is not None and (not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 0xFFFF):
+            return f"{key} is not a system id"
+    for key, bound in (("startup", 3600.0), ("time_scale", 1000.0)):
+        value = about.get(key)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= bound \
+                or not math.isfinite(value):
+            return f"{key} is not a number of seconds in (0, {bound:g}]"
+    claims = about.get("claims")
+    if claims is not None and not (isinstance(claims, list) and all(isinstance(c, str) for c in claims)):
+        return "claims must be null or a list of text"
     return None

@@ -15,6 +15,7 @@ PCAP_MAGICS = {b"\xd4\xc3\xb2\xa1": ("<", 1e-6), b"\xa1\xb2\xc3\xd4": (">", 1e-6
                b"\x4d\x3c\xb2\xa1": ("<", 1e-9), b"\xa1\xb2\x3c\x4d": (">", 1e-9)}
 PCAPNG_SHB = b"\x0a\x0d\x0d\x0a"
 RECORD_LIMIT = 1 << 18  # bytes: no link layer captures more in one record (tcpdump's largest snaplen)
+NUMBERED = (0x00000BAD, 0x40000BAD, 9)  # custom blocks and systemd journal entries: frames to Wireshark
 
 
 class CaptureError(ValueError):
@@ -32,8 +33,8 @@ class Record:
 
 
 def records(buf, sections: list[str] | None = None) -> Iterator[Record]:
-    """Every record of the capture in ``buf``; raises CaptureError at the first damage. A pcapng section's
-    comments are appended to ``sections`` as they are read."""
+    """Every record of the capture in ``buf``; raises CaptureError at the first damage. The comments of a pcapng
+    section and of its interface statistics are appended to ``sections`` as they are read."""
     head = bytes(buf[:4])
     if head in PCAP_MAGICS:
         return _pcap(buf, *PCAP_MAGICS[head])
@@ -81,17 +82,22 @@ def _pcapng(buf, sections: list[str]) -> Iterator[Record]:
             raise CaptureError(f"a pcapng block at byte {pos} is truncated or damaged (length {blen})")
         body = buf[pos + 8:pos + blen - 4]
         pos += blen
-        if btype == 0x0A0D0D0A:
-            sections += [value.decode("utf-8", "replace") for code, value in _options(body, 16, e) if code == 1]
+        if btype in (0x0A0D0D0A, 5):  # a section's or an interface statistics block's comments
+            sections += [value.decode("utf-8", "replace") for code, value in
+                         _options(body, 16 if btype == 0x0A0D0D0A else 12, e) if code == 1]
         elif btype == 1:  # interface description
-            interfaces.append(_interface(body, e))
+            interfaces.append(_interface(number + 1, body, e))
         elif btype in (6, 3, 2):  # enhanced, simple, obsolete packet
             number += 1
             yield _packet(number, btype, body, e, interfaces)
+        elif btype in NUMBERED:
+            number += 1  # Wireshark numbers these blocks as frames too
 
 
-def _interface(body, e: str) -> tuple[int, float, float]:
+def _interface(number: int, body, e: str) -> tuple[int, float, float]:
     """(link type, seconds per timestamp unit, offset in seconds) of an interface description block."""
+    if len(body) < 8:
+        raise CaptureError(f"an interface description before record {number} is damaged ({len(body)} bytes)")
     linktype = struct.unpack_from(e + "H", body, 0)[0]
     unit, offset = 1e-6, 0.0
     for code, value in _options(body, 8, e):
@@ -110,10 +116,9 @@ def _packet(number: int, btype: int, body, e: str, interfaces: list) -> Record:
             return Record(number, 0.0, linktype, bytes(body[4:4 + min(length, len(body) - 4)]), length)
         if btype == 6:
             iface, high, low, caplen, length = struct.unpack_from(e + "IIIII", body, 0)
-            start = 20
         else:
             iface, _, high, low, caplen, length = struct.unpack_from(e + "HHIIII", body, 0)
-            start = 20
+        start = 20
         linktype, unit, offset = interfaces[iface]
     except (struct.error, IndexError):
         raise CaptureError(f"record {number} is damaged (a packet block without its interface or fields)") from None

@@ -22,22 +22,23 @@ def ethernet_udp(src: str, sport: int, dst: str, dport: int, payload: bytes, ide
 
 
 def pcap_record(t: float, frame: bytes) -> bytes:
-    seconds = int(t)
-    return struct.pack("<IIII", seconds, round((t - seconds) * 1e6) % 1000000, len(frame), len(frame)) + frame
+    seconds, micros = divmod(round(t * 1e6), 1_000_000)
+    return struct.pack("<IIII", seconds, micros, len(frame), len(frame)) + frame
 
 
 def ip_udp(src: str, sport: int, dst: str, dport: int, payload: bytes) -> bytes:
     """One IPv4 or IPv6 UDP datagram as it was on the wire (checksums left 0: "not computed")."""
     udp = struct.pack("!HHHH", sport, dport, 8 + len(payload), 0) + payload
-    if ":" in src:
-        return struct.pack("!IHBB16s16s", 6 << 28, len(udp), 17, 64, socket.inet_pton(socket.AF_INET6, src),
-                           socket.inet_pton(socket.AF_INET6, dst)) + udp
+    if ":" in src:  # a link-local address's zone (fe80::1%eth0) is not on the wire
+        return struct.pack("!IHBB16s16s", 6 << 28, len(udp), 17, 64, socket.inet_pton(socket.AF_INET6, src.split("%")[0]),
+                           socket.inet_pton(socket.AF_INET6, dst.split("%")[0])) + udp
     return ethernet_udp(src, sport, dst, dport, payload)[14:]
 
 
 class PcapNgWriter:
     """A pcapng file of raw IP datagrams (link type 101) with nanosecond timestamps, a comment on the section
-    (``about``) and one on every packet. Hand-written: scapy's writer cannot comment the section header."""
+    (``about``), one on every packet and, at ``close``, one on the interface's statistics. Hand-written: scapy's
+    writer cannot comment the section header."""
 
     def __init__(self, handle, about: str):
         self.handle = handle
@@ -49,6 +50,12 @@ class PcapNgWriter:
         ns = round(epoch * 1e9)
         body = struct.pack("<IIIII", 0, ns >> 32, ns & 0xFFFFFFFF, len(packet), len(packet))
         self.handle.write(_block(6, body + packet + bytes(-len(packet) % 4) + _options([(1, comment.encode())])))
+
+
+    def close(self, epoch: float, comment: str) -> None:
+        """End the file with the interface's statistics block, commented (how a reader knows the run ended)."""
+        ns = round(epoch * 1e9)
+        self.handle.write(_block(5, struct.pack("<III", 0, ns >> 32, ns & 0xFFFFFFFF) + _options([(1, comment.encode())])))
 
 
 def _options(items) -> bytes:

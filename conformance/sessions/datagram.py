@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Iterable, Iterator, Protocol
 
+from ..capture.recording import OWN, RECEIVED
 from ..core.session import Answer, Job
 from ..kinds.scenario import Addressing, Conductor
 
@@ -121,7 +122,7 @@ class DatagramSession:
         t = self.transport.now()
         if got is not None:
             arrived, data, source = got
-            self._record(arrived, tuple(source), tuple(self.transport.address[:2]), data, "received")
+            self._record(arrived, tuple(source), tuple(self.transport.address[:2]), data, RECEIVED)
             parsed = self.wire.parse(data)
             self.heard += parsed.decoded is not None
             self.peer.observe(arrived, parsed, tuple(source) == tuple(self.transport.target[:2]))
@@ -142,7 +143,7 @@ class DatagramSession:
     def _send(self, datagrams) -> None:
         for address, data in datagrams:
             self._record(self.transport.now(), tuple(self.transport.address[:2]),
-                         tuple((address or self.transport.target)[:2]), data, "the session's own")
+                         tuple((address or self.transport.target)[:2]), data, OWN)
             why = self.transport.send(data, address)
             if why and why not in self.unsent:
                 self.unsent.append(why)

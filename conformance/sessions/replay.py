@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..capture.recording import OWN, RECEIVED
+
 
 @dataclass(frozen=True)
 class Recorded:
@@ -18,13 +20,20 @@ class Recorded:
     comment: str
 
 
-class ReplayLink:
-    """The transport: what the target sent, delivered at its recorded time; the session's own sends checked."""
+class RecordingEnds(KeyboardInterrupt):
+    """The recording of a run that did not end (interrupted, or the file cut) has no more: the replay stops as
+    an interrupted run does, keeping the cases that finished within the recording."""
 
-    def __init__(self, recording: list[Recorded], target: tuple, address: tuple, epoch0: float):
-        self.target, self.address, self.epoch0 = target, address, epoch0
-        self.incoming = [r for r in recording if r.comment == "received"]
-        self.expected = [r for r in recording if r.comment not in ("received", "the session's own")]
+
+class ReplayLink:
+    """The transport: what the target sent, delivered at its recorded time; the session's own sends checked.
+    ``complete``: the recorded run ended; otherwise nothing is known past its last datagram."""
+
+    def __init__(self, recording: list[Recorded], target: tuple, address: tuple, epoch0: float, complete: bool):
+        self.target, self.address, self.epoch0, self.complete = target, address, epoch0, complete
+        self.end = recording[-1].t if recording else 0.0
+        self.incoming = [r for r in recording if r.comment == RECEIVED]
+        self.expected = [r for r in recording if r.comment not in (RECEIVED, OWN)]
         self.t, self.next, self.sent = 0.0, 0, 0
         self.departures: list[str] = []
 
@@ -43,12 +52,14 @@ class ReplayLink:
             self.next += 1
             self.t = max(self.t, r.t)
             return self.t, r.data, r.src
+        if not self.complete and until > self.end:
+            raise RecordingEnds
         self.t = max(self.t, until)
         return None
 
     def record(self, epoch: float, src: tuple, dst: tuple, data: bytes, comment: str) -> None:
         """The replayed session's datagram: a scenario's send is compared with the recording's next one."""
-        if comment in ("received", "the session's own"):
+        if comment in (RECEIVED, OWN):
             return
         if self.sent < len(self.expected):
             was = self.expected[self.sent]

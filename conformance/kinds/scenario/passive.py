@@ -1,6 +1,7 @@
 """The exchange rules of a suite (exchanges.json) applied to exchanges the suite only watched (a capture, a
 monitor): a request never answered within its bound, a reply echoing another value than its request's, a reply
-to another system or from another node, a status after a terminal one, a sequence that never ends. Sans-IO.
+to another system, a status after a terminal one, a sequence that never ends. Sans-IO. (A reply from another
+node than the one asked answers nothing: the request it leaves unanswered is the finding.)
 
 Requests are matched to replies as the scenario engine does, by the exchange's echo fields. A capture can
 begin in the middle of an exchange or miss a frame, so a reply that echoes no request seen is set aside; it
@@ -59,6 +60,7 @@ class PassiveExchanges:
         self.ended: dict[int, deque[_Open]] = {id(r): deque() for r in self.rules}  # answered, kept one more bound
         self.keyed: dict[tuple, list[_Open]] = {}
         self.pairs: set[tuple] = set()  # (rule, requester, node) of every request seen
+        self.senders: dict = {}  # system id -> the address and port its frames come from
         self.next_deadline = float("inf")
 
     @property
@@ -68,6 +70,10 @@ class PassiveExchanges:
 
     def observe(self, w: Watched) -> list[Finding]:
         out = self._expire(w.time) if w.time > self.next_deadline else []
+        origin = (getattr(w.where, "src", None), getattr(w.where, "sport", None))  # the datagram's sender
+        if w.src != w.dst and origin[0] is not None and self.senders.get(w.dst) == origin:
+            return out  # sent from its addressee's own address: echoed back by it (DUNE's router does), not new
+        self.senders[w.src] = origin
         answers = False  # a frame that answers an open request is not a new request (CLEAR answers CLEAR)
         for rule in self.by_reply.get(w.message, ()):
             if _matches(w.fields, rule.reply_when):
@@ -165,7 +171,11 @@ class PassiveExchanges:
         return None
 
     def _from_node(self, o: _Open, w: Watched) -> bool:
-        return o.request.dst in (None, self.anyone) or w.src == o.request.dst
+        """Whether ``w`` comes from the system the request was for (any other than the requester, for a request
+        to no system in particular)."""
+        if o.request.dst in (None, self.anyone):
+            return w.src != o.request.src
+        return w.src == o.request.dst
 
     # ------------------------------------------------------------ bounds
 

@@ -39,6 +39,9 @@ class ImcWire:
         except FrameError as exc:
             return Parsed(data, self.named_in_header(data), None, f"{exc.rule} at byte {exc.offset}: {exc.detail}",
                           self.rule_clauses.get(exc.rule), codec.byte_order_of(data))
+        except RecursionError:
+            return Parsed(data, self.named_in_header(data), None, "inline messages nested deeper than the reference "
+                          "codec follows", None, codec.byte_order_of(data))
         return Parsed(data, decoded["abbrev"], decoded, encoding=codec.byte_order_of(data))
 
     def knows(self, message: str) -> bool:
