@@ -216,12 +216,12 @@ def read_capture(path: Path):
 
     try:
         if str(path) == "-":
-            data = sys.stdin.buffer.read(PIPE_LIMIT + 1)
+            data = _read_stream(sys.stdin.buffer, path)
         else:
             with path.open("rb") as handle:
                 if path.is_file() and path.stat().st_size > 0:
                     return mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ)
-                data = handle.read(PIPE_LIMIT + 1)  # a pipe, a device, a file of /proc
+                data = _read_stream(handle, path)  # a pipe, a device, a file of /proc
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from exc
     except ValueError as exc:  # mmap refused it
@@ -231,6 +231,17 @@ def read_capture(path: Path):
     if len(data) > PIPE_LIMIT:
         raise UsageError(f"{path}: more than {PIPE_LIMIT >> 20} MB through a pipe or device: write it to a file")
     return data
+
+
+def _read_stream(handle, path: Path) -> bytes:
+    """A capture from a stream: its first bytes must be a capture's (so /dev/zero is refused at once)."""
+    from .capture.records import PCAP_MAGICS, PCAPNG_SHB
+    from .usage import UsageError
+
+    head = handle.read(4)
+    if head and head not in PCAP_MAGICS and head != PCAPNG_SHB:
+        raise UsageError(f"{path}: not a pcap or pcapng capture (it starts {head.hex()})")
+    return head + handle.read(PIPE_LIMIT + 1 - len(head))
 
 
 def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, complete_: bool):
