@@ -99,8 +99,9 @@ class CaptureJudge:
             self.origin = got.time
         if got.time > self.last:
             self.last = got.time
-        self.source = source
-        self.sources.add(source)
+        if source != self.source or not self.sources:
+            self.source = source
+            self.sources.add(source)
         recorded = got.comment is not None and self.keep_commented  # a datagram of a recorded run: on its ports
         # what a recorded run's robustness phase sent on purpose (corpus frames, garbage, probes): its frames are
         # not the node's to judge, but the node answers its requests

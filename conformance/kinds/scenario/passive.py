@@ -163,12 +163,18 @@ class PassiveExchanges:
     def _answered_by(self, mine, w: Watched) -> _Open | None:
         """The request a reply answers among those it matches: its addressee's before another system's, and the
         oldest not yet answered before the latest answered (whose statuses go on)."""
-        ours = [o for o in mine if self._from_node(o, w)]
-        for candidates in ([o for o in ours if o.request.src == w.dst], ours):
-            o = next((o for o in candidates if not o.answered), None) or (candidates[-1] if candidates else None)
-            if o is not None:
-                return o
-        return None
+        open_other = latest_mine = latest_other = None
+        for o in mine:  # oldest first
+            if not self._from_node(o, w):
+                continue
+            if o.request.src == w.dst:
+                if not o.answered:
+                    return o
+                latest_mine = o
+            else:
+                open_other = open_other or (None if o.answered else o)
+                latest_other = o
+        return latest_mine or open_other or latest_other
 
     def _from_node(self, o: _Open, w: Watched) -> bool:
         """Whether ``w`` comes from the system the request was for (any other than the requester, for a request
