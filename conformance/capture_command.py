@@ -250,6 +250,7 @@ def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, comp
     ValueError if the recording cannot be."""
     from .core.runner import run_cases
     from .files import open_corpus
+    from .live import check_params
     from .sessions.replay import Recorded, ReplayLink
 
     try:
@@ -259,6 +260,7 @@ def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, comp
         raise ValueError(f"the recorded run's suite or profile: {exc}") from None
     if about["edition"] not in suite.editions:
         raise ValueError(f"the recorded run's edition {about['edition']!r} is not one of the suite's")
+    check_params(suite, everything, about["params"])  # what the live run would have refused, as it would have
     wanted = set(about["cases"])
     cases = [c for c in everything if c.id in wanted and c.kind == "scenario" and (not messages or c.group in messages)]
     options = {"params": dict(about["params"]), "effects": set(about["effects"]), "time_scale": about["time_scale"],

@@ -54,7 +54,7 @@ def options(args, suite, everything) -> dict:
            "corpus": tuple(c for c in everything if c.kind == "vector")}
     if args.restart_cmd is not None:
         restart_argv(args.restart_cmd)
-    _check_params(suite, everything, out["params"])
+    check_params(suite, everything, out["params"])
     if args.claims:
         from .files import read_json
         try:
@@ -65,7 +65,7 @@ def options(args, suite, everything) -> dict:
     return out
 
 
-def _check_params(suite, everything, params: dict) -> None:
+def check_params(suite, everything, params: dict) -> None:
     """A usage error for a parameter that a live case's message cannot carry (a number too large for its field,
     a name too long for a datagram), before anything is sent."""
     if not params:

@@ -337,8 +337,7 @@ def test_generated_traffic_passes_clean_and_damage_is_found(tmp_path, capsys):
 
 def test_filters_by_address_and_time(tmp_path, capsys):
     write_capture(tmp_path / "c.pcap", DEFS, SUITE.wire, EDITION, 1000, damaged=0.0)
-    for argv, frames in [(["--src", "10.0.0.30"], None), (["--host", "0x4cf0"], None),
-                         (["--start", "10", "--end", "19.99"], None)]:
+    for argv in (["--src", "10.0.0.30"], ["--host", "0x4cf0"], ["--start", "10", "--end", "19.99"]):
         code, _ = run(tmp_path / "c.pcap", *argv, "--json", tmp_path / "r.json", capsys=capsys)
         doc = json.loads((tmp_path / "r.json").read_text())
         notes = " ".join(doc["notes"])

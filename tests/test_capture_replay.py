@@ -197,3 +197,28 @@ def test_a_dry_run_records_nothing(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["run", "--target", "udp://127.0.0.1:9", "--dry-run", "--pcap", "dry.pcapng"]) == 2
     assert "--dry-run sends nothing" in capsys.readouterr().err
+
+
+def test_a_long_run_description_is_written_and_read_back(tmp_path):
+    from imc_conformance.capture.recording import read_about
+
+    about = about_run("imc", EDITION, [f"imc/Heartbeat/scenario/{i}" for i in range(5000)],
+                      {"profile": {"name": "seed"}}, "udp://127.0.0.1:6002", None, None, 10.0)
+    path = tmp_path / "long.pcapng"
+    with path.open("wb") as handle:  # over 65,535 bytes: one pcapng option cannot hold it
+        PcapNgWriter(handle, ABOUT + json.dumps(about)).write(1.7e9, ("127.0.0.1", 6002), ("127.0.0.1", 6001),
+                                                              HEARTBEAT_FRAME, "received")
+    sections: list[str] = []
+    assert len(list(records(path.read_bytes(), sections))) == 1
+    assert read_about(sections) == about
+
+
+def test_a_recorded_parameter_the_live_run_would_refuse_is_not_replayed(tmp_path, capsys):
+    about = about_run("imc", EDITION, ["imc/Heartbeat/scenario/alive"], {"profile": {"name": "seed"},
+                      "params": {"peer": "x" * 70000}}, "udp://127.0.0.1:6002", None, None, 10.0)
+    path = tmp_path / "p.pcapng"
+    with path.open("wb") as handle:
+        PcapNgWriter(handle, ABOUT + json.dumps(about)).write(1.7e9, ("127.0.0.1", 6002), ("127.0.0.1", 6001),
+                                                              HEARTBEAT_FRAME, "received")
+    assert main(["pcap", str(path)]) == 2
+    assert "the recorded run cannot be replayed: --param peer=" in capsys.readouterr().err

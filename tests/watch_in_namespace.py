@@ -1,6 +1,6 @@
 """Run inside a network namespace the test creates (unshare): watch --iface lo while two sockets exchange IMC
 frames on it, then stop it with SIGINT once it has judged them (its progress lines say so)."""
-import json, signal, socket, subprocess, sys, time
+import signal, socket, subprocess, sys, time
 from imc_conformance.suites import load_suite
 from imc_conformance.suites.imc import codec
 

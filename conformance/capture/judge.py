@@ -76,29 +76,29 @@ class CaptureJudge:
 
     def feed(self, record: Record, source: str = "") -> None:
         """Judge one record; ``source`` names its file in reports (several files judged at once)."""
-        self.records += 1
-        if self.origin is None:
-            self.origin = record.time
-        if record.time > self.last:
-            self.last = record.time
+        self._saw(record.time)
         got = self.dissector.datagram(record)
         if got.__class__ is str:
             self.skipped[got if not got.startswith("link type") else f"{describe_linktype(record.linktype)}: "
                          "not Ethernet, raw IP, Linux cooked capture or BSD loopback"] += 1
             return
-        self.feed_datagram(got, source)
+        self._judge_datagram(got, source)
 
     def received(self, got: Datagram) -> None:
         """Judge a datagram a socket received (each is a record of its own)."""
-        self.records += 1
-        self.feed_datagram(got)
+        self._saw(got.time)
+        self._judge_datagram(got)
 
-    def feed_datagram(self, got: Datagram, source: str = "") -> None:
-        """Judge one UDP datagram (one a socket received, or one found in a record)."""
+    def _saw(self, t: float) -> None:
+        """Count a record seen at time ``t``: the capture's first and last times."""
+        self.records += 1
         if self.origin is None:
-            self.origin = got.time
-        if got.time > self.last:
-            self.last = got.time
+            self.origin = t
+        if t > self.last:
+            self.last = t
+
+    def _judge_datagram(self, got: Datagram, source: str = "") -> None:
+        """Judge one UDP datagram of a record (``feed``) or of a socket (``received``)."""
         if source != self.source or not self.sources:
             self.source = source
             self.sources.add(source)

@@ -82,9 +82,10 @@ def _pcapng(buf, sections: list[str]) -> Iterator[Record]:
             raise CaptureError(f"a pcapng block at byte {pos} is truncated or damaged (length {blen})")
         body = buf[pos + 8:pos + blen - 4]
         pos += blen
-        if btype in (0x0A0D0D0A, 5):  # a section's or an interface statistics block's comments
-            sections += [value.decode("utf-8", "replace") for code, value in
-                         _options(body, 16 if btype == 0x0A0D0D0A else 12, e) if code == 1]
+        if btype in (0x0A0D0D0A, 5):  # a section's or an interface statistics block's comments, each joined
+            comments = [value for code, value in _options(body, 16 if btype == 0x0A0D0D0A else 12, e) if code == 1]
+            if comments:
+                sections.append(b"".join(comments).decode("utf-8", "replace"))
         elif btype == 1:  # interface description
             interfaces.append(_interface(number + 1, body, e))
         elif btype in (6, 3, 2):  # enhanced, simple, obsolete packet
@@ -127,9 +128,8 @@ def _packet(number: int, btype: int, body, e: str, interfaces: list) -> Record:
     comment = None
     after = start + caplen + (-caplen % 4)
     if after < len(body):
-        for code, value in _options(body, after, e):
-            if code == 1:
-                comment = value.decode("utf-8", "replace")
+        comments = [value for code, value in _options(body, after, e) if code == 1]
+        comment = b"".join(comments).decode("utf-8", "replace") if comments else None
     return Record(number, ((high << 32) | low) * unit + offset, linktype, bytes(body[start:start + caplen]), length, comment)
 
 

@@ -8,6 +8,7 @@ import struct
 
 PCAP_HEADER = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)  # microseconds, Ethernet
 MACS = bytes.fromhex("020000000002" "020000000001")
+OPTION_LIMIT = 0xFFFC  # bytes of a pcapng option value (its length is 16 bits; values are padded to 4)
 
 
 def ethernet_udp(src: str, sport: int, dst: str, dport: int, payload: bytes, ident: int = 0) -> bytes:
@@ -59,7 +60,13 @@ class PcapNgWriter:
 
 
 def _options(items) -> bytes:
-    out = b"".join(struct.pack("<HH", code, len(value)) + value + bytes(-len(value) % 4) for code, value in items)
+    """Options of a block; a value longer than an option holds (65,535 bytes) goes in several of the same code
+    (a reader joins a section's comments)."""
+    out = b""
+    for code, value in items:
+        for start in range(0, max(len(value), 1), OPTION_LIMIT):
+            part = value[start:start + OPTION_LIMIT]
+            out += struct.pack("<HH", code, len(part)) + part + bytes(-len(part) % 4)
     return out + struct.pack("<HH", 0, 0)
 
 
