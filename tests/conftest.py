@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import subprocess
 from pathlib import Path
 
@@ -25,6 +26,10 @@ def checkout_state() -> str | None:
 
 def pytest_sessionstart(session):
     session.config.stash[_BEFORE] = checkout_state()
+    # A shell without job control starts background commands with SIGINT ignored, and every program the tests start
+    # would inherit that: the Ctrl-C tests could not interrupt them. Interrupts work here as in a terminal.
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_sessionfinish(session, exitstatus):
