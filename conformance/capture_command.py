@@ -10,11 +10,11 @@ import sys
 import time
 from pathlib import Path
 
+from .arguments import time_scale
 from .capture.judge import CaptureJudge, Selection
 from .capture.recording import OWN, RECEIVED, read_about, run_ended
 from .capture.records import CaptureError, records
-
-PIPE_LIMIT = 1 << 30  # bytes of a capture read from a pipe or a device
+from .limits import PIPE_LIMIT
 
 
 def address(text: str) -> str | int:
@@ -63,7 +63,7 @@ def add_judging(parser, add_suite, positive_seconds) -> None:
     parser.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
     parser.add_argument("--list-frames", type=count, default=20, metavar="N",
                         help="failing frames listed per message and rule (default 20)")
-    parser.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
+    parser.add_argument("--time-scale", type=time_scale, default=1.0, metavar="F",
                         help="multiply every exchange's time bound by F (slow links)")
     parser.add_argument("--strict", action="store_true", help="NON_STRICT (a SHOULD not met) and INCONCLUSIVE fail too")
 
@@ -275,7 +275,7 @@ def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, comp
     sent = next((r for r in recording if r.comment not in (RECEIVED, OWN)), recording[0])
     link = ReplayLink(recording, target=sent.dst, address=sent.src, epoch0=t0, complete=complete_)
     session = suite.open_replay(link, target=about["target"], src=about["src"], dst=about["dst"],
-                                startup=about["startup"])
+                                startup=about["startup"], first_unique=about.get("first_unique"))
     result = run_cases(session, suite, cases, edition=about["edition"], adapter=about["target"], strict=strict,
                        options=options, clock=link.now, started=_iso(t0))
     if not result.complete:

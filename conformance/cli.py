@@ -9,11 +9,11 @@ import importlib.metadata
 import importlib.util
 import inspect
 import json
-import math
 import shlex
 import sys
 from pathlib import Path
 
+from .arguments import megabytes, positive_seconds, startup_seconds, time_scale
 from .core.cases import expectation, select_cases
 from .core.session import AdapterStartError
 from .core.verdicts import failing
@@ -166,6 +166,7 @@ def command_run(args) -> int:
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
     console = terminal()
+    args.first_unique = live.first_unique() if args.target else None
     recorder = open_recording(args, suite, cases, options)
     try:
         session = live.open_target(args, suite, recorder) if args.target else open_session(name, argv, args, suite)
@@ -188,10 +189,14 @@ def command_run(args) -> int:
         if recorder is not None:
             recorder.close(complete=result is not None and result.complete)
     print_result(result, console)
-    if recorder is not None:
+    problems = write_reports(result, targets, console)
+    if recorder is not None and recorder.failed:
+        print(f"imc-conformance: cannot write the pcapng to {printable(str(args.pcap))}: {recorder.failed} (the run "
+              "and its other reports went on)", file=sys.stderr)
+        problems += 1
+    elif recorder is not None:
         console.print(f"pcapng of the exchange ({recorder.count} datagrams): {printable(str(args.pcap))}",
                       highlight=False, markup=False)
-    problems = write_reports(result, targets, console)
     if args.write_waivers:
         from .core.waivers import waivers_document
         failing_ids = [c.id for c in result.cases if failing(c.verdict, strict=False)]
@@ -213,7 +218,8 @@ def open_recording(args, suite, cases, options):
     from .capture.recording import Recorder, about_run
 
     ids = [c.id for c in cases if c.kind == "scenario"]
-    about = about_run(suite.name, args.edition, ids, options, args.target, args.src, args.dst, args.startup)
+    about = about_run(suite.name, args.edition, ids, options, args.target, args.src, args.dst, args.startup,
+                      args.first_unique)
     try:
         Path(args.pcap).parent.mkdir(parents=True, exist_ok=True)
         return Recorder(Path(args.pcap), about)
@@ -264,7 +270,7 @@ def command_report(args) -> int:
     try:
         result = read_result(Path(args.result))
     except ValueError as exc:  # not JSON, unreadable, or not a valid result
-        raise UsageError(f"cannot read result {args.result}: {exc}") from exc
+        raise UsageError(f"cannot read the result {exc}") from exc
     console = terminal()
     print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
@@ -281,22 +287,6 @@ def terminal():
     from rich.console import Console
 
     return Console(highlight=False, width=None if sys.stdout.isatty() else 160)
-
-
-def positive_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
-    if not math.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: give a positive, finite number of seconds")
-    return value
-
-
-def megabytes(text: str) -> int:
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number of megabytes (0: no limit)")
-    return int(text)
 
 
 def add_suite(parser) -> None:
@@ -359,7 +349,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="the session's own IMC id (default 0x4CF0)")
     live_group.add_argument("--dst", type=system_id, default=None, metavar="ID",
                       help="the node's IMC id: start at once instead of waiting for a frame from the node")
-    live_group.add_argument("--startup", type=positive_seconds, default=10.0, metavar="SECONDS",
+    live_group.add_argument("--startup", type=startup_seconds, default=10.0, metavar="SECONDS",
                       help="how long to wait for a first valid frame from the target (default 10)")
     live_group.add_argument("--allow-multicast", action="store_true",
                       help="allow a multicast or broadcast target or bind (never needed on loopback)")
@@ -371,7 +361,7 @@ def build_parser() -> argparse.ArgumentParser:
     live_group.add_argument("--claims", metavar="FILE", help='JSON {"services": [...]}: the services the target implements; '
                                                        "scenarios of other services are UNSUPPORTED")
     live_group.add_argument("--profile", metavar="NAME", help="where deployed practice differs from the seeds (default seed)")
-    live_group.add_argument("--time-scale", type=positive_seconds, default=1.0, metavar="F",
+    live_group.add_argument("--time-scale", type=time_scale, default=1.0, metavar="F",
                       help="multiply every time bound by F (slow links)")
     live_group.add_argument("--pcap", metavar="FILE", help="write every datagram of the run as pcapng, each commented "
                                                            "with its scenario and step (imc-conformance pcap replays it)")

@@ -16,6 +16,7 @@ from pathlib import Path
 from jsonschema import Draft202012Validator
 from jsonschema.exceptions import best_match
 
+from . import inputs
 from .cache import remembered
 from .core.cases import Case
 from .core.results import SCHEMAS, RunResult, format_version
@@ -54,13 +55,12 @@ def shorten(text: str, limit: int = 240) -> str:
 
 
 def read_json(path: Path, error=ValueError):
+    """The bytes and the value of a JSON file (``inputs.read_json``: bounded in size and nesting); ``error`` with
+    one line naming the file if it cannot be read."""
     try:
-        raw = path.read_bytes()
-        return raw, json.loads(raw)
-    except json.JSONDecodeError as exc:
-        raise error(f"{path}: not JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from exc
-    except (OSError, UnicodeDecodeError) as exc:
-        raise error(f"{path}: cannot read: {exc.strerror if isinstance(exc, OSError) else exc}") from exc
+        return inputs.read_json(path)
+    except ValueError as exc:
+        raise error(str(exc)) from None
 
 
 # ---------------------------------------------------------------- case files
@@ -81,7 +81,7 @@ def open_corpus(suite_name: str, directory: Path | None = None) -> tuple[Suite, 
             return suite, read_cases(suite, tuple(suite.case_folders.items()))
         suite = load_suite(suite_name, folder.parent)  # a bare folder of case files: its parent's data, if any
         return suite, read_cases(suite, ((folder.name, next(iter(suite.case_folders.values()))),), bare=folder)
-    except LookupError as exc:
+    except LookupError as exc:  # an unknown suite
         raise CorpusError(str(exc)) from exc
 
 
@@ -137,10 +137,14 @@ def load_waivers(path: Path, known_ids: set[str], today: dt.date) -> tuple[dict[
 
 
 def read_result(path: Path) -> RunResult:
-    """A saved result (any format version this code knows); ValueError naming the JSON path of a problem."""
+    """A saved result (any format version this code knows); ValueError naming the file and the JSON path of a
+    problem."""
     _, doc = read_json(Path(path))
-    version = format_version(doc)
-    problem = schema_error(VECTORS / "schema" / SCHEMAS[version], doc, "")
+    try:
+        version = format_version(doc)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+    problem = schema_error(VECTORS / "schema" / SCHEMAS[version], doc, str(path))
     if problem:
         raise ValueError(problem)
     if version < 3:  # formats 1 and 2 knew only IMC: numeric message ids, no title (nor, in 1, completeness,

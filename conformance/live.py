@@ -6,14 +6,20 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import secrets
 import shlex
+import shutil
 import subprocess
+import threading
 from pathlib import Path
 
 from .kinds.scenario import options as vocabulary
+from .kinds.scenario.conductor import UNIQUE_SPAN
 from .render.common import printable
 
 RESTART_TIMEOUT = 120.0  # seconds a --restart-cmd may take
+TAIL_WAIT = 1.0  # seconds to read what a failed restart command wrote, when a node it started holds its stderr
 LIVE_FLAGS = ("target", "param", "allow_effects", "claims", "profile", "robustness", "restart_cmd", "replay_effects",
               "dry_run")
 
@@ -56,12 +62,15 @@ def options(args, suite, everything) -> dict:
         restart_argv(args.restart_cmd)
     check_params(suite, everything, out["params"])
     if args.claims:
-        from .files import read_json
+        from .inputs import read_json
         try:
             _, doc = read_json(Path(args.claims))
+        except ValueError as exc:
+            raise ValueError(f"--claims: {exc}") from None
+        try:
             out["claims"] = vocabulary.claims(behaviour, doc)
         except ValueError as exc:
-            raise ValueError(f"--claims {args.claims}: {exc}") from exc
+            raise ValueError(f"--claims {args.claims}: {exc}") from None
     return out
 
 
@@ -143,36 +152,73 @@ def list_live_cases(suite, cases) -> int:
     return 0
 
 
+def first_unique() -> int:
+    """Where a run's request ids start: random, so that two runs on one node (or one after the other) do not answer
+    to each other's numbers; recorded with the run, so that a replay finds the same."""
+    return secrets.randbelow(UNIQUE_SPAN)
+
+
 def open_target(args, suite, recorder=None):
     """The session with ``--target`` (its datagrams told to ``recorder``); ValueError with a one-line reason."""
     restart = restarter(restart_argv(args.restart_cmd)) if args.restart_cmd is not None else None
     return suite.open_target(args.target, bind=args.bind, src=args.src, dst=args.dst,
                              allow_group=args.allow_multicast, startup=args.startup, restart=restart,
-                             recorder=recorder)
+                             recorder=recorder, first_unique=args.first_unique)
 
 
 def restart_argv(text: str) -> list[str]:
+    """The restart command's argv, its program found (a usage error now, not at the first bisection)."""
     try:
         argv = shlex.split(text)
     except ValueError as exc:
         raise ValueError(f"--restart-cmd cannot be split: {exc}") from None
     if not argv:
         raise ValueError("--restart-cmd is empty (an unset variable?): give the command that restarts the target")
+    program = argv[0]
+    found = (os.path.isfile(program) and os.access(program, os.X_OK)) if os.sep in program else shutil.which(program)
+    if not found:
+        raise ValueError(f"--restart-cmd: {printable(program)} is not a program that can be run"
+                         + ("" if os.sep in program else " (not found on PATH)"))
     return argv
 
 
+class _Tail:
+    """The last bytes a stream carries, read by a thread until it ends: a restart command may leave the node it
+    started holding its stderr, which is then drained (never left to fill and block the node) for as long as the
+    node lives."""
+
+    KEEP = 4096
+
+    def __init__(self, stream):
+        self.data = b""
+        self.thread = threading.Thread(target=self._drain, args=(stream,), daemon=True)
+        self.thread.start()
+
+    def _drain(self, stream) -> None:
+        with stream:
+            for chunk in iter(lambda: stream.read1(65536), b""):
+                self.data = (self.data + chunk)[-self.KEEP:]
+
+
 def restarter(argv: list[str]):
-    """A function that runs the restart command (no shell, bounded) and says why it failed, or None."""
+    """A function that runs the restart command (no shell, in a session of its own, bounded) and says why it
+    failed, or None. The command's exit is what counts: a node it starts in the background may hold its output."""
     def restart() -> str | None:
         try:
-            done = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, timeout=RESTART_TIMEOUT,
-                                  start_new_session=True)
-        except subprocess.TimeoutExpired:
-            return f"the restart command did not end within {RESTART_TIMEOUT:g} s"
+            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                    start_new_session=True)
         except OSError as exc:
             return f"the restart command could not run: {exc.strerror or exc}"
-        if done.returncode != 0:
-            tail = done.stderr[-300:].decode("utf-8", "replace").strip()
-            return f"the restart command exited with {done.returncode}" + (f": {printable(tail)}" if tail else "")
+        tail = _Tail(proc.stderr)
+        try:
+            code = proc.wait(timeout=RESTART_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+            return f"the restart command did not end within {RESTART_TIMEOUT:g} s"
+        if code != 0:
+            tail.thread.join(TAIL_WAIT)  # at once when nothing it started holds its stderr
+            text = tail.data[-300:].decode("utf-8", "replace").strip()
+            return f"the restart command exited with {code}" + (f": {printable(text)}" if text else "")
         return None
     return restart

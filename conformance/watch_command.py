@@ -8,6 +8,7 @@ import datetime as dt
 import select
 import signal
 import socket
+import struct
 import sys
 import time
 from pathlib import Path
@@ -17,7 +18,7 @@ from .capture.judge import CaptureJudge, Selection
 from .capture.records import Record
 
 REFRESH = 1.0  # seconds between redraws of the table
-MAX_DATAGRAM = 65535
+SOL_PACKET, PACKET_STATISTICS = 263, 6  # linux/socket.h, linux/if_packet.h
 
 
 def add_command(sub, add_suite, add_reports, positive_seconds, address, add_judging) -> None:
@@ -74,15 +75,25 @@ def command_watch(args) -> int:
             print(f"imc-conformance: watching {what} (Ctrl-C to stop)", file=sys.stderr, flush=True)
             while not stopping and time.monotonic() < end:
                 judge_all(listen.take(min(REFRESH, end - time.monotonic())))
+                report_losses(listen, judge)
                 redraw()
     finally:
         for sig, handler in handlers.items():
             signal.signal(sig, handler)
         judge_all(listen.stop())  # what arrived before the stop is judged too
+        report_losses(listen, judge)
     result = judge.result(implementation=what, started=started, duration=round(time.monotonic() - began, 3),
                           strict=args.strict, title=suite.title, until=time.time())
     print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
+
+
+def report_losses(listen, judge: CaptureJudge) -> None:
+    """Tell the judge of datagrams the listener lost since it last said (and when)."""
+    lost = listen.drops() - judge.lost
+    if lost > 0:
+        judge.losses(listen.since, time.time(), lost)
+    listen.since = time.time()
 
 
 def _table(console, judge: CaptureJudge):
@@ -119,29 +130,42 @@ def _table(console, judge: CaptureJudge):
 
 
 class SocketListener:
-    """A UDP socket bound to the watched address: every datagram sent to it, with its sender."""
+    """A UDP socket bound to the watched address: every datagram sent to it, with its sender, and the count of
+    those the kernel dropped before they were read (``drops``)."""
 
     def __init__(self, sock: socket.socket):
         self.sock, self.address, self.number = sock, sock.getsockname(), 0
+        self.dropped, self.since = 0, time.time()
 
     def take(self, wait: float) -> list[Datagram]:
         """What arrived within ``wait`` seconds (at most a thousand datagrams at a time)."""
+        from .sessions.udp import read
+
         out = []
         ready, _, _ = select.select([self.sock], [], [], max(0.0, wait))
         while ready and len(out) < 1000:
             try:
-                data, source = self.sock.recvfrom(MAX_DATAGRAM)
+                data, source, dropped = read(self.sock)
             except OSError:  # nothing more, or an ICMP error reported on the socket
                 break
+            self.dropped = max(self.dropped, dropped or 0)
             self.number += 1
             out.append(Datagram(self.number, time.time(), source[0], source[1], self.address[0], self.address[1], data))
         return out
+
+    def drops(self) -> int:
+        from .sessions.udp import kernel_drops
+
+        if not self.sock._closed:
+            self.dropped = max(self.dropped, kernel_drops([self.sock]).get(self.sock.fileno(), 0))
+        return self.dropped
 
     def stop(self) -> list[Datagram]:
         """Stop listening; what was already queued on the socket."""
         out, more = [], self.take(0)
         while more:
             out, more = out + more, self.take(0)
+        self.drops()
         self.sock.close()
         return out
 
@@ -183,9 +207,13 @@ class Sniffer:
         logging.getLogger("scapy.runtime").setLevel(logging.ERROR)  # its guess at the loopback's link layer
         self.linktype, self.loopback = linktype, iface == "lo" or Path(f"/sys/class/net/{iface}/type").read_text(
             ).strip() == "772"
+        from scapy.config import conf
+
         self.queue: SimpleQueue = SimpleQueue()
         self.number, self.previous = 0, None
-        self.sniffer = AsyncSniffer(iface=iface, store=False, prn=self.queue.put)  # no BPF: it needs tcpdump
+        self.dropped, self.since = 0, time.time()
+        self.socket = conf.L2listen(iface=iface)  # no BPF filter: it needs tcpdump
+        self.sniffer = AsyncSniffer(opened_socket=self.socket, store=False, prn=self.queue.put)
         self.sniffer.start()
         deadline = time.monotonic() + 10  # until its socket is open (scapy sets continue_sniff then)
         while not getattr(self.sniffer, "continue_sniff", False) and self.sniffer.thread.is_alive():
@@ -218,8 +246,18 @@ class Sniffer:
             if self.queue.empty():
                 return out
 
+    def drops(self) -> int:
+        """Packets the kernel dropped before the sniffer read them (PACKET_STATISTICS, which resets when read)."""
+        try:
+            _, dropped = struct.unpack("=II", self.socket.ins.getsockopt(SOL_PACKET, PACKET_STATISTICS, 8))
+        except (OSError, AttributeError, struct.error):
+            return self.dropped
+        self.dropped += dropped
+        return self.dropped
+
     def stop(self) -> list[Record]:
         """Stop sniffing; what was already captured."""
+        self.drops()
         try:
             self.sniffer.stop()
         except Exception:  # noqa: BLE001 - a sniffer that never started has nothing to stop

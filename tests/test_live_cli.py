@@ -137,7 +137,33 @@ def test_the_restart_command_runs_without_a_shell_and_says_why_it_failed(tmp_pat
     failed = restarter([sys.executable, "-c", "import sys; sys.stderr.write('no node here'); sys.exit(3)"])()
     assert failed == "the restart command exited with 3: no node here"
     assert "could not run" in restarter([str(tmp_path / "missing")])()
-    assert restart_argv("restart-node --fast 'a b'") == ["restart-node", "--fast", "a b"]
+    assert restart_argv(f"{sys.executable} --fast 'a b'") == [sys.executable, "--fast", "a b"]
+
+
+@pytest.mark.parametrize("command, why", [
+    ("/nonexistent/restart", "/nonexistent/restart is not a program that can be run"),
+    ("no-such-restart-program --fast", "no-such-restart-program is not a program that can be run (not found on PATH)"),
+    ("", "--restart-cmd is empty"),
+])
+def test_a_restart_command_that_cannot_run_is_refused_before_the_run(command, why, capsys):
+    code = main(["run", "--target", "udp://127.0.0.1:9", "--robustness", "--restart-cmd", command, "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2 and why in err and err.count("\n") == 1, err
+
+
+def test_a_restart_command_that_leaves_the_node_in_the_background_counts_by_its_exit(tmp_path):
+    """Item 5 of the second hardening round: the node the command starts holds its output; the command's exit is
+    what counts (the node is still running when the restart is over)."""
+    script = tmp_path / "restart.sh"
+    script.write_text(f"#!/bin/sh\n{sys.executable} -c 'import time; time.sleep(600)' &\necho $! > {tmp_path / 'pid'}\n"
+                      "echo started >&2\n")
+    script.chmod(0o755)
+    assert restarter(restart_argv(str(script)))() is None
+    pid = int((tmp_path / "pid").read_text())
+    try:
+        os.kill(pid, 0)  # the backgrounded node outlived the restart: it was not waited for
+    finally:
+        os.kill(pid, signal.SIGKILL)
 
 
 def test_serve_and_run_agree_over_loopback(node, tmp_path, capsys):

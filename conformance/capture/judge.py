@@ -73,6 +73,12 @@ class CaptureJudge:
         self.groups = selection.groups
         self.filtered = any(v is not None for v in (selection.src, selection.dst, selection.host, selection.start,
                                                     selection.end))
+        self.lost = 0  # datagrams the watcher lost before it could read them (the kernel dropped them)
+
+    def losses(self, start: float, end: float, count: int) -> None:
+        """``count`` datagrams were lost between ``start`` and ``end`` (a live watcher's receive buffer)."""
+        self.lost += count
+        self.tracker.lost(start, end)
 
     def feed(self, record: Record, source: str = "") -> None:
         """Judge one record; ``source`` names its file in reports (several files judged at once)."""
@@ -220,6 +226,9 @@ class CaptureJudge:
         if not self.tallies and not self.valid:
             out.append("no frame of the suite was judged: none on the ports (--port names others) or in the selection")
         out += [f"{n:,} not judged: {why}" for why, n in self.skipped.most_common()]
+        if self.lost:
+            out.append(f"{self.lost:,} datagrams were dropped by the kernel before they could be read (a flood, or a "
+                       "receive buffer too small): not judged, and an exchange left unanswered meanwhile is INCONCLUSIVE")
         if self.flood is not None:
             out.append(f"the exchanges are followed until the recorded run's robustness phase began, "
                        f"{self.flood - self.origin:.3f} s in (its flood and the node's answers to it are not exchanges)")

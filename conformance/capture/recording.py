@@ -9,6 +9,9 @@ import json
 import math
 import time
 
+from ..kinds.scenario.conductor import UNIQUE_SPAN
+from ..inputs import parse_json
+from ..limits import STARTUP_MAX, TIME_SCALE_MAX
 from .writing import PcapNgWriter
 
 ABOUT = "imc-conformance run "
@@ -17,29 +20,42 @@ RECEIVED, OWN = "received", "the session's own"  # the comments of what the sess
 
 
 class Recorder:
+    """Records a run; a recording that cannot be written (a full disk) stops, says why in ``failed``, and never
+    stops the run."""
+
     def __init__(self, path, about: dict):
         self.path = path
         self.handle = open(path, "wb")  # noqa: SIM115 - open for the whole run, closed by close()
-        self.writer = PcapNgWriter(self.handle, ABOUT + json.dumps(about, sort_keys=True))
         self.count = 0
+        self.failed: str | None = None
+        self._safely(lambda: setattr(self, "writer", PcapNgWriter(self.handle, ABOUT + json.dumps(about, sort_keys=True))))
 
     def record(self, epoch: float, src: tuple, dst: tuple, data: bytes, comment: str) -> None:
-        self.writer.write(epoch, src, dst, bytes(data), comment)
-        self.count += 1
-        self.last = epoch
+        if self.failed is None and self._safely(lambda: self.writer.write(epoch, src, dst, bytes(data), comment)):
+            self.count += 1
+            self.last = epoch
 
     def close(self, complete: bool) -> None:
         """Close the file; a run that ended, not one interrupted, says so in its last comment."""
-        if complete:
-            self.writer.close(getattr(self, "last", time.time()), COMPLETE)
-        self.handle.close()
+        if complete and self.failed is None:
+            self._safely(lambda: self.writer.close(getattr(self, "last", time.time()), COMPLETE))
+        self._safely(self.handle.close)
+
+    def _safely(self, write) -> bool:
+        try:
+            write()
+            return True
+        except OSError as exc:
+            self.failed = self.failed or f"{exc.strerror or exc} after {self.count} datagrams"
+            return False
 
 
 def about_run(suite: str, edition: str, case_ids: list[str], options: dict, target: str, src, dst,
-              startup: float) -> dict:
-    """What the section comment says of a run: enough to plan its scenarios again."""
+              startup: float, first_unique: int | None = None) -> dict:
+    """What the section comment says of a run: enough to plan its scenarios again (``first_unique``: where its
+    request ids started, when chosen for the run; a replay then finds the same ids, and the same session id)."""
     return {"suite": suite, "edition": edition, "cases": case_ids, "target": target, "src": src, "dst": dst,
-            "startup": startup, "params": options.get("params", {}), "effects": sorted(options.get("effects", ())),
+            "startup": startup, **({"first_unique": first_unique} if first_unique is not None else {}), "params": options.get("params", {}), "effects": sorted(options.get("effects", ())),
             "time_scale": options.get("time_scale", 1.0), "profile": options["profile"]["name"],
             "claims": sorted(options["claims"]) if "claims" in options else None}
 
@@ -50,9 +66,9 @@ def read_about(sections: list[str]) -> dict | None:
     for text in sections:
         if text.startswith(ABOUT) and text != COMPLETE:
             try:
-                about = json.loads(text[len(ABOUT):])
-            except json.JSONDecodeError as exc:
-                raise ValueError(f"the recorded run's description is damaged: {exc}") from None
+                about = parse_json(text[len(ABOUT):], "the recorded run's description")
+            except ValueError as exc:
+                raise ValueError(f"{exc} (it is damaged)") from None
             problem = _problem(about)
             if problem:
                 raise ValueError(f"the recorded run's description is damaged: {problem}")
@@ -78,11 +94,11 @@ def _problem(about) -> str | None:
         return "cases and effects must be lists of text"
     if not all(isinstance(v, (str, int, float)) and not isinstance(v, bool) for v in about["params"].values()):
         return "params must map names to text or numbers"
-    for key in ("src", "dst"):
+    for key, top in (("src", 0xFFFF), ("dst", 0xFFFF), ("first_unique", UNIQUE_SPAN)):
         value = about.get(key)
-        if value is not None and (not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 0xFFFF):
-            return f"{key} is not a system id"
-    for key, bound in (("startup", 3600.0), ("time_scale", 1000.0)):
+        if value is not None and (not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < top):
+            return f"{key} is not a number in [0, {top})"
+    for key, bound in (("startup", STARTUP_MAX), ("time_scale", TIME_SCALE_MAX)):
         value = about.get(key)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= bound \
                 or not math.isfinite(value):

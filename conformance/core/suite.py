@@ -117,7 +117,8 @@ class Suite(ABC):
     def open_target(self, target: str, **settings):
         """A session with a live target (``--target``), for the suite's scenarios; ValueError with a one-line
         reason if it cannot be opened. Settings: ``bind``, ``src``, ``dst``, ``allow_group``, ``startup``,
-        ``restart`` (a function restarting the target, or None), ``recorder`` (told of every datagram, or None)."""
+        ``restart`` (a function restarting the target, or None), ``recorder`` (told of every datagram, or None),
+        ``first_unique`` (where the run's request ids start: random per run, recorded)."""
         raise ValueError(f"the suite {self.name!r} has no live targets")
 
     def capture_rules(self):
@@ -126,7 +127,7 @@ class Suite(ABC):
 
     def open_replay(self, link, **settings):
         """A session replaying a recorded run over ``link`` (sessions/replay.py); settings as the run had them:
-        ``target``, ``src``, ``dst``, ``startup``."""
+        ``target``, ``src``, ``dst``, ``startup``, ``first_unique``."""
         raise ValueError(f"the suite {self.name!r} has no live targets to replay")
 
     def profile(self, name: str) -> dict:

@@ -32,6 +32,9 @@ class Transport(Protocol):
         """The next datagram from the target's host, when it arrived and where from, or None once ``until`` has
         passed."""
 
+    def drops(self, poll: bool = False) -> int:
+        """(optional) Datagrams lost before the session could read them, so far (``poll``: ask now)."""
+
     def close(self) -> None: ...
 
 
@@ -53,21 +56,34 @@ class Peer(Protocol):
     def accepts(self, parsed) -> bool:
         """Whether something that arrived is for the session (by its header), so the scenarios see it."""
 
+    def own(self, parsed) -> bool:
+        """Whether something that arrived was sent as the session (its own frames echoed back, or another
+        system's using its id): never the target's."""
+
+    def impostor(self, parsed) -> str | None:
+        """Why something that arrived shows another system using the session's identity on the link, or None."""
+
 
 class DatagramSession:
     incidents: tuple = ()
     stderr = ""
 
     def __init__(self, transport: Transport, peer: Peer, wire, hello: dict, startup: float, restart=None,
-                 recorder=None):
+                 recorder=None, first_unique: int = 1000):
         """``startup``: seconds to wait for the target to show itself before every scenario is INCONCLUSIVE;
         ``restart()``: restarts the target (None, or why it could not), for the robustness phase to bisect;
-        ``recorder.record(epoch, src, dst, data, comment)`` is told of every datagram sent and received."""
+        ``recorder.record(epoch, src, dst, data, comment)`` is told of every datagram sent and received;
+        ``first_unique``: where the run's request ids and sequence numbers start (a run of its own, apart from
+        another run's on the same node)."""
         self.transport, self.peer, self.wire, self._hello, self.startup = transport, peer, wire, hello, startup
+        self.first_unique = first_unique
         self.restart, self.recorder = restart, recorder
         self.name = hello["implementation"]
-        self.heard = 0  # valid frames from the target
+        self.heard = 0  # valid frames from the target (never the session's own)
         self.unsent: list[str] = []  # why the session's own datagrams (announce, heartbeat) could not be sent
+        self.drops = 0  # datagrams the transport lost before the session read them
+        self.impostors: list[str] = []  # evidence that another system uses the session's identity
+        self.conductor: Conductor | None = None
 
     def hello(self) -> dict:
         return self._hello
@@ -83,7 +99,8 @@ class DatagramSession:
                 yield job, Answer("inconclusive", reason=why)
             return
         conductor = self.conductor = Conductor(jobs, lambda job: job.request.params["program"],
-                                               Addressing(self.peer.system, None, self.peer.node), self.transport.epoch)
+                                               Addressing(self.peer.system, None, self.peer.node), self.transport.epoch,
+                                               first_unique=self.first_unique)
         self._transmit(conductor.start(self.transport.now()))
         while True:
             while conductor.finished:
@@ -124,13 +141,39 @@ class DatagramSession:
             arrived, data, source = got
             self._record(arrived, tuple(source), tuple(self.transport.address[:2]), data, RECEIVED)
             parsed = self.wire.parse(data)
-            self.heard += parsed.decoded is not None
+            self._losses(arrived, conductor, poll=False)
+            impostor = self.peer.impostor(parsed)
+            if impostor is not None:
+                self._impaired(arrived, conductor, impostor)
+            if parsed.decoded is not None and not self.peer.own(parsed):
+                self.heard += 1
             self.peer.observe(arrived, parsed, tuple(source) == tuple(self.transport.target[:2]))
             if conductor is not None and self.peer.accepts(parsed):
                 self._transmit(conductor.deliver(arrived, parsed))
+                for why in conductor.impostors[len(self.impostors):]:
+                    self._impaired(arrived, conductor, why)
+        if conductor is not None and conductor.deadline is not None and conductor.deadline <= t:
+            self._losses(t, conductor, poll=True)  # before a step is judged, whatever the kernel dropped since
+            if not self.heard:
+                conductor.impaired(t, f"nothing has come from {self.name} yet (is the address right?)")
         if conductor is not None:
             self._transmit(conductor.wake(t))
         self._send(self.peer.due(t))
+
+    def _losses(self, t: float, conductor: Conductor | None, poll: bool) -> None:
+        """Tell the scenarios of datagrams the transport lost since it last said."""
+        count = getattr(self.transport, "drops", None)
+        total = count(poll) if count is not None else 0
+        if total > self.drops:
+            lost, self.drops = total - self.drops, total
+            if conductor is not None:
+                conductor.impaired(t, f"the kernel dropped {lost} datagram(s) before the session could read them")
+
+    def _impaired(self, t: float, conductor: Conductor | None, why: str) -> None:
+        if why not in self.impostors:
+            self.impostors.append(why)
+        if conductor is not None:
+            conductor.impaired(t, why)
 
     def _transmit(self, outgoing) -> None:
         for item in list(outgoing):
@@ -155,10 +198,15 @@ class DatagramSession:
     @property
     def notes(self) -> list[str]:
         """What the report should say about the link."""
-        out = list(getattr(self.transport, "notes", []))
+        out = list(getattr(self.peer, "notes", [])) + list(getattr(self.transport, "notes", []))
         out += [f"the session's own announce or heartbeat: {why}" for why in self.unsent[:3]]
         if not self.heard:
             out.append(f"no valid frame ever came from {self.name}: check the address and port")
+        if self.drops:
+            out.append(f"{self.drops} datagrams were dropped by the kernel before the session could read them (a flood, "
+                       "or a receive buffer too small): a step that failed for want of a frame is INCONCLUSIVE")
+        out += [f"another system may be using the session's identity: {why} (--src sets another id); a step that "
+                "failed for want of a frame is INCONCLUSIVE" for why in self.impostors[:3]]
         return out
 
     def close(self) -> None:

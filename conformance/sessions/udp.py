@@ -3,24 +3,36 @@
 Safety first: a run talks to one unicast host. Multicast and broadcast targets and binds are refused unless
 explicitly allowed, because real IMC nodes (DUNE, imcpy actors) listen on 224.0.75.69 and a test run must
 never reach a real vehicle by accident. Datagrams from any other host than the target's are dropped.
+
+What the kernel drops is counted, never silent: the sockets get a large receive buffer, and the count of
+datagrams the kernel dropped because the session did not read them in time (Linux: ``SO_RXQ_OVFL`` with every
+datagram read, and ``/proc/net/udp`` when asked) is what ``drops`` says, so a verdict a lost datagram could
+have changed is made INCONCLUSIVE rather than FAIL.
 """
 
 from __future__ import annotations
 
 import errno
 import ipaddress
+import os
 import select
 import socket
+import struct
+import sys
 import time
 import urllib.parse
 
 MAX_DATAGRAM = 65535
 SCHEMES = ("udp", "imc+udp")
+RECEIVE_BUFFER = 8 << 20  # bytes asked for each socket's receive queue (the kernel may give less)
+LINUX = sys.platform.startswith("linux")
+SO_RXQ_OVFL, SO_RCVBUFFORCE = 40, 33  # linux/socket.h; Python's socket module does not name them
+PROC_UDP = ("/proc/net/udp", "/proc/net/udp6")
 
 
 def parse_endpoint(text: str, what: str, default_port: int | None = None) -> tuple[str, int]:
-    """``udp://HOST:PORT`` or ``imc+udp://HOST:PORT/`` (IPv6 as ``[::1]``), or ``HOST:PORT`` for a bind;
-    ValueError with a one-line reason."""
+    """``udp://HOST:PORT`` or ``imc+udp://HOST:PORT/`` (IPv6 as ``[::1]``), or ``HOST:PORT`` for a bind (where
+    port 0, any free port, is allowed: a target needs a real one); ValueError with a one-line reason."""
     raw = text if "://" in text else f"udp://{text}"
     try:
         url = urllib.parse.urlsplit(raw)
@@ -36,7 +48,14 @@ def parse_endpoint(text: str, what: str, default_port: int | None = None) -> tup
     port = port if port is not None else default_port
     if port is None:
         raise ValueError(f"{what} {text!r}: no port (expected e.g. udp://127.0.0.1:6002)")
+    if port == 0 and default_port is None:
+        raise ValueError(f"{what} {text!r}: port 0 is no port a node listens on (expected e.g. udp://127.0.0.1:6002)")
     return host, port
+
+
+def url(host: str, port: int) -> str:
+    """``udp://HOST:PORT`` as ``--target`` reads it back (an IPv6 address in brackets)."""
+    return f"udp://[{host}]:{port}" if ":" in host else f"udp://{host}:{port}"
 
 
 def resolve(host: str, port: int, what: str) -> tuple[int, tuple]:
@@ -50,14 +69,52 @@ def resolve(host: str, port: int, what: str) -> tuple[int, tuple]:
 
 
 def bound_socket(family: int, address: tuple, what: str) -> socket.socket:
-    """A UDP socket bound to ``address``; ValueError naming ``what`` if the bind fails."""
+    """A UDP socket bound to ``address``, with a large receive buffer and its drops counted (``read``); ValueError
+    naming ``what`` if the bind fails."""
     sock = socket.socket(family, socket.SOCK_DGRAM)
     try:
         sock.bind(address)
     except OSError as exc:
         sock.close()
         raise ValueError(f"{what}: cannot bind {address[0]}:{address[1]}: {exc.strerror or exc}") from None
+    if LINUX:
+        try:  # root may pass net.core.rmem_max; anyone else gets at most that
+            sock.setsockopt(socket.SOL_SOCKET, SO_RCVBUFFORCE, RECEIVE_BUFFER)
+        except OSError:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER)
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, SO_RXQ_OVFL, 1)
+        except OSError:
+            pass
     return sock
+
+
+def read(sock: socket.socket) -> tuple[bytes, tuple, int | None]:
+    """One datagram of at most 65,535 bytes, where it came from, and the socket's count of datagrams the kernel
+    dropped so far (None where the kernel does not say)."""
+    data, ancillary, _, source = sock.recvmsg(MAX_DATAGRAM, socket.CMSG_SPACE(4))
+    for level, kind, value in ancillary:
+        if level == socket.SOL_SOCKET and kind == SO_RXQ_OVFL and len(value) >= 4:
+            return data, source, struct.unpack("=I", value[:4])[0]
+    return data, source, None
+
+
+def kernel_drops(socks) -> dict[int, int]:
+    """Datagrams the kernel dropped on each socket (by file descriptor) as ``/proc/net/udp`` counts them; {}
+    where it cannot be read."""
+    inodes = {os.fstat(s.fileno()).st_ino: s.fileno() for s in socks}
+    out = {}
+    for name in PROC_UDP if LINUX else ():
+        try:
+            with open(name, "rb") as table:
+                lines = table.read(1 << 22).splitlines()[1:]
+        except OSError:
+            continue
+        for line in lines:
+            cols = line.split()
+            if len(cols) >= 13 and cols[9].isdigit() and int(cols[9]) in inodes and cols[-1].isdigit():
+                out[inodes[int(cols[9])]] = int(cols[-1])
+    return out
 
 
 def group_address(host: str) -> str | None:
@@ -99,25 +156,19 @@ class UdpTransport:
         self.target, self.family = target, family
         if (":" in bind[0]) != (family == socket.AF_INET6):
             raise ValueError(f"--bind {bind[0]} and the target {target[0]} are not of the same address family")
-        self.sock = socket.socket(family, socket.SOCK_DGRAM)
-        try:
-            self.sock.bind(bind)
-        except OSError as exc:
-            self.sock.close()
-            raise ValueError(f"cannot bind {bind[0]}:{bind[1]}: {exc.strerror or exc}") from None
+        self.sock = bound_socket(family, bind, "--bind")
         self.sock.setblocking(False)
         self.address = self.sock.getsockname()
         self.sockets = [self.sock]
         for port in listen:
-            extra = socket.socket(family, socket.SOCK_DGRAM)
             try:
-                extra.bind((bind[0], port))
-            except OSError:
-                extra.close()
+                extra = bound_socket(family, (bind[0], port), "a discovery port")
+            except ValueError:
                 continue
             extra.setblocking(False)
             self.sockets.append(extra)
             break
+        self._drops: dict[int, int] = {}  # datagrams the kernel dropped, per socket (by file descriptor)
         self.listening = [s.getsockname()[1] for s in self.sockets[1:]]
         self.offset = time.time() - time.monotonic()
         self.dropped = 0  # datagrams from other hosts
@@ -150,13 +201,24 @@ class UdpTransport:
             if not ready:
                 return None
             try:
-                data, source = ready[0].recvfrom(MAX_DATAGRAM)
+                data, source, dropped = read(ready[0])
             except OSError:
                 continue  # e.g. ICMP port unreachable reported on the socket
+            if dropped is not None:
+                fd = ready[0].fileno()
+                self._drops[fd] = max(self._drops.get(fd, 0), dropped)
             if source[0] != self.target[0]:
                 self.dropped += 1
                 continue
             return time.monotonic(), data, source[:2]
+
+    def drops(self, poll: bool = False) -> int:
+        """Datagrams the kernel dropped because the session did not read them in time, so far; ``poll``: also ask
+        the kernel now (else the count comes with the datagrams read)."""
+        if poll:
+            for fd, count in kernel_drops(self.sockets).items():
+                self._drops[fd] = max(self._drops.get(fd, 0), count)
+        return sum(self._drops.values())
 
     @property
     def notes(self) -> list[str]:

@@ -1,5 +1,9 @@
 """What the suites share: definitions, rules and errata as JSON files of a data folder, and writing (or checking)
-the files a generator builds."""
+the files a generator builds.
+
+The packaged files were checked when they were built (and by the tests); a file of a folder given instead with
+``--vectors`` is a user's: it is read bounded and checked against its schema, and a problem is a corpus error
+naming the file and the JSON path."""
 
 from __future__ import annotations
 
@@ -10,33 +14,58 @@ from pathlib import Path
 from ..core.suite import Suite
 
 
+def read_data_file(path: Path, schema: str | None, packaged: Path):
+    """The JSON document of a suite's data file: as it is when packaged, else bounded and checked against
+    ``schema`` (a file of vectors/schema); CorpusError naming the file and the JSON path of a problem."""
+    if path.is_relative_to(packaged):
+        return json.loads(path.read_text(encoding="utf-8"))
+    from ..files import CorpusError, schema_error
+    from ..inputs import read_json
+    from ..paths import VECTORS
+
+    try:
+        _, doc = read_json(path)
+    except ValueError as exc:
+        raise CorpusError(str(exc)) from None
+    problem = schema_error(VECTORS / "schema" / schema, doc, str(path)) if schema else None
+    if problem:
+        raise CorpusError(problem)
+    return doc
+
+
 class DataSuite(Suite):
     """A suite over a data folder: the packaged one (``packaged``), or one given instead with ``--vectors``."""
 
     packaged: Path
+    data_schemas: dict[str, str] = {}  # a data file -> the schema (in vectors/schema) a user's copy must pass
 
     def data(self, name: str) -> Path:
         """The folder's own file ``name``, else the packaged one (definitions and rules belong to the suite)."""
         own = self.folder / name
         return own if own.exists() else self.packaged / name
 
+    def read_data(self, name: str, default=None):
+        """The document of data file ``name`` (``read_data_file``), or ``default`` where neither folder has it."""
+        path = self.data(name)
+        if not path.exists():
+            return default
+        return read_data_file(path, self.data_schemas.get(name), self.packaged)
+
     @cached_property
     def rules(self) -> list[dict]:
         """The rules a refusal may name."""
-        return json.loads(self.data("rules.json").read_text(encoding="utf-8"))["rules"]
+        return self.read_data("rules.json")["rules"]
 
     @cached_property
     def behaviour(self) -> dict | None:
         """The exchanges file (request/reply rules, and the parameters, effects and services of live cases), or
         None for a suite without one."""
-        path = self.data("exchanges.json")
-        return json.loads(path.read_text(encoding="utf-8")) if path.exists() else None
+        return self.read_data("exchanges.json")
 
     @cached_property
     def statements(self) -> list[dict]:
         """The behavioural statements live cases cite (statements.json), or none."""
-        path = self.data("statements.json")
-        return json.loads(path.read_text(encoding="utf-8"))["statements"] if path.exists() else []
+        return self.read_data("statements.json", {"statements": []})["statements"]
 
     def live_problem(self, kind: str, case: dict, params: dict | None = None) -> tuple[str, str] | None:
         """The first problem of a scenario (or robustness probe) the definitions and the exchanges file can see:
@@ -68,7 +97,9 @@ class DataSuite(Suite):
     def errata(self) -> list[dict]:
         """The errata of the folder itself: a corpus given instead brings its own, or none."""
         path = self.folder / "errata.json"
-        return json.loads(path.read_text(encoding="utf-8"))["errata"] if path.exists() else []
+        if not path.exists():
+            return []
+        return read_data_file(path, self.data_schemas.get("errata.json"), self.packaged)["errata"]
 
 
 def write_generated(root: Path, files: dict[str, str], check: bool, label: str) -> int:

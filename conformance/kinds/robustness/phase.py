@@ -96,6 +96,7 @@ class Probe:
     baseline: bool = False
     down: bool = False  # silenced, and not served again since (no restart)
     silencings: list = field(default_factory=list)  # after what it stopped answering, and what bisecting found
+    blind: str | None = None  # why an unanswered round could not be judged (the link could not show everything)
     garbage: str | None = None  # what the garbage did to it
     error: str | None = None  # why its request cannot be sent
 
@@ -130,6 +131,7 @@ class PhaseMachine:
         self.done = False
         self.restart_wanted = False
         self.waiting: _Wait | None = None
+        self.impairments: list[str] = []  # what the link could not show, in order
         self._script = None
 
     # ------------------------------------------------------------------ driving the script
@@ -163,6 +165,11 @@ class PhaseMachine:
         if self.done or self.waiting is None or t < self.waiting.until:
             return []
         return self._resume(t, epoch, None)
+
+    def impaired(self, t: float, why: str) -> None:
+        """The link could not show everything (``why``): a probe unanswered in the round under way is not judged."""
+        self.impairments.append(why)
+        self._log("impaired", why)
 
     def cannot_run(self, t: float, why: str) -> None:
         """The session could not send what the phase sent: every probe is untested (not the node's fault)."""
@@ -295,6 +302,7 @@ class PhaseMachine:
         the probes that got none."""
         waiting, until, attempt = {id(p): p for p in probes}, self.now + patience, 0
         tries = dict.fromkeys(waiting, 0)
+        impaired = len(self.impairments)
         while waiting:
             attempt += 1
             asked = {}
@@ -320,11 +328,14 @@ class PhaseMachine:
                         got = None
                     elif deadline <= self.now:
                         del asked[key]
+        blind = "; ".join(dict.fromkeys(self.impairments[impaired:]))
         for key, probe in waiting.items():
             spec = probe.program.case["probe"]
             self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within {spec['within']} s "
-                               f"({tries[key]} tries)", probe)
-        return list(waiting.values())
+                               f"({tries[key]} tries)" + (f"; not judged: {blind}" if blind else ""), probe)
+            if blind:
+                probe.blind = probe.blind or f"{when}: {blind}"
+        return [] if blind else list(waiting.values())
 
     def _ask(self, probe: Probe, spec: dict):
         """(what accepts the reply, the request to send or None) for one try of a probe."""
@@ -385,6 +396,10 @@ class PhaseMachine:
                 findings.append({"check": "probe:garbage", "passed": probe.garbage is None, "level": level,
                                  "clause": clause, "detail": f"no {what} after {probe.garbage}" if probe.garbage
                                  else f"{what} still received after the garbage burst"})
+            if probe.blind:
+                findings.append({"check": "probe:link", "passed": False, "inconclusive": True, "level": level,
+                                 "clause": clause, "detail": f"no {what} in a round the link could not show whole, "
+                                                             f"so not judged ({probe.blind})"})
         timeline = [e for e in self.timeline if e.get("probe") in (None, member)]
         return {"findings": findings, "timeline": [{k: v for k, v in e.items() if k != "probe"} for e in timeline],
                 "frames": self.frames_seen if member == 0 else [], "error": probe.error}

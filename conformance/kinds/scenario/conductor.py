@@ -9,6 +9,10 @@ a sequence number), or that is addressed to the entity a scenario's requests cam
 scenario only, and a late reply to a scenario that has ended goes to nobody; anything else goes to every
 running scenario, which takes what its current step waits for.
 
+A reply addressed to the session's own id whose echoed number is far from every number the run's requests
+carried answers a request the run never sent: another system is using the session's id (``impostors`` says
+so; a node that does not echo is off by little, and fails the echo rule instead).
+
 The caller does the I/O: it sends what ``start``/``deliver``/``wake``/``restarted`` return, calls ``wake`` at
 ``deadline``, restarts the target when ``restart_wanted`` says so (then calls ``restarted``), and collects
 ``finished`` as (job, record).
@@ -21,6 +25,9 @@ from typing import Callable
 
 from .matchers import hashable
 from .wire import Addressing, Composed
+
+UNIQUE_SPAN = 0xFFF0  # the run's unique numbers cycle through 1..UNIQUE_SPAN
+NEAR = 256  # how far off a run's own number an echoed one may be and still be taken for a node's mistake
 
 
 @dataclass(frozen=True)
@@ -42,8 +49,10 @@ class Conductor:
         self.finished: list[tuple[object, dict]] = []
         self.owners: dict[tuple, int] = {}
         self.entities: dict[int, int] = {}  # the entity each machine's requests came from (the latest wins)
-        self._next_unique, self._entities, self._entity = first_unique, entities, 0
+        self._first_unique = self._next_unique = first_unique % UNIQUE_SPAN
+        self._entities, self._entity = entities, 0
         self._released: set[int] = set()  # machines seen to have released their resources
+        self.impostors: list[str] = []  # replies that answer requests this run never sent
 
     @property
     def done(self) -> bool:
@@ -60,7 +69,7 @@ class Conductor:
 
     def unique(self, _name: str) -> int:
         """A number no other request of the run carries (request ids, sequence numbers)."""
-        self._next_unique = self._next_unique % 0xFFF0 + 1
+        self._next_unique = self._next_unique % UNIQUE_SPAN + 1
         return self._next_unique
 
     def start(self, t: float) -> list[Outgoing]:
@@ -98,6 +107,11 @@ class Conductor:
     def deliver(self, t: float, parsed) -> list[Outgoing]:
         out = []
         owner = self._owner(parsed)
+        if owner is None:
+            foreign = self._foreign(parsed)
+            if foreign is not None and foreign not in self.impostors:
+                self.impostors.append(foreign)
+                self.impaired(t, foreign)
         if owner is not None:
             targets = [owner] if owner in self.running else []
         else:
@@ -126,6 +140,12 @@ class Conductor:
                 out += self._sent(job, machine, machine.restarted(t, self.epoch(t), problem))
         return out + self._reap(t)
 
+    def impaired(self, t: float, why: str) -> None:
+        """The link could not show everything (``why``): every running machine is told (a step failing for want of
+        a frame is then INCONCLUSIVE)."""
+        for machine in self.running.values():
+            machine.impaired(t, why)
+
     def undeliverable(self, t: float, job, why: str) -> list[Outgoing]:
         """What a job's machine sent could not be sent (``why``): it stops, unable to run (INCONCLUSIVE)."""
         for key, machine in self.running.items():
@@ -147,6 +167,31 @@ class Conductor:
             if to is not None and to[0] == self.addressing.system and to[1] in self.entities:
                 owner = self.entities[to[1]]
         return owner
+
+    def _foreign(self, parsed) -> str | None:
+        """Why a reply addressed to the session's id answers a request the run never sent, or None."""
+        if parsed.decoded is None or not self.jobs:
+            return None
+        to = self.program_of(self.jobs[0]).wire.destination(parsed)
+        if to is None or to[0] != self.addressing.system:
+            return None
+        for message, echoes in self.owners:
+            if message == parsed.message:
+                values = [parsed.fields.get(name) for name, _ in echoes]
+                if values and not any(self._near(v) for v in values):
+                    shown = ", ".join(f"{name}={v}" for (name, _), v in zip(echoes, values))
+                    return (f"a {message} to the session's id {self.addressing.system} answers a request this run never "
+                            f"sent ({shown})")
+                return None
+        return None
+
+    def _near(self, value) -> bool:
+        """Whether a number is one the run's requests carried, or close to one (a node's mistake, not a stranger's)."""
+        if not isinstance(value, int) or isinstance(value, bool) or not 0 < value <= UNIQUE_SPAN:
+            return True  # not a number the run could have issued (text, a special value): no evidence either way
+        issued = (self._next_unique - self._first_unique) % UNIQUE_SPAN
+        offset = (value - self._first_unique) % UNIQUE_SPAN
+        return offset <= issued + NEAR or offset >= UNIQUE_SPAN - NEAR
 
     def _sent(self, job: int, machine, composed: list[Composed]) -> list[Outgoing]:
         while len(machine.keys) > machine.keys_seen:

@@ -128,10 +128,12 @@ def judgement(case: dict, request: Request, answer: Answer, reply_group: str) ->
     for frame in record["frames"]:
         ok = frame["problem"] is None
         what = frame["message"] or "a frame"
+        verdict, state = ((Verdict.PASS, "is well formed") if ok else
+                          (Verdict.INCONCLUSIVE, "was not judged") if frame.get("undecided") else
+                          (Verdict.FAIL, "is malformed"))
         checks.append(CheckResult(
-            f"bytes-{frame['n']}", Verdict.PASS if ok else Verdict.FAIL,
-            f"{what} received at {frame['t']} s is well formed" if ok else
-            f"{what} received at {frame['t']} s is malformed: {frame['problem']}",
+            f"bytes-{frame['n']}", verdict, f"{what} received at {frame['t']} s {state}"
+            + (f": {frame['problem']}" if not ok else ""),
             clause=frame["clause"] or case["clause"], filed_under=frame["message"] or reply_group))
     return Judgement(checks, record["timeline"])
 

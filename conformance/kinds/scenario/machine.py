@@ -7,6 +7,11 @@ exchange rules, resent after the bound if the exchange is idempotent; or any suc
 them); ``sequence``: replies passing through progress states to exactly one terminal state, then
 nothing more for a quiet period; ``silence``: no such message for a while; ``alive``: the node still
 sends something; ``wait``.
+
+A step that fails for want of a frame (no reply, no terminal state) while the session could not see everything
+(the link reported an impairment: the kernel dropped datagrams, another system uses the session's id) or while
+a frame of the awaited message could not be judged is INCONCLUSIVE, never FAIL: the missing frame may have been
+among those the suite did not see.
 """
 
 from __future__ import annotations
@@ -64,6 +69,7 @@ class Finding:
     level: str
     clause: str
     detail: str
+    inconclusive: bool = False  # failed, but the session could not see everything it needed to judge
 
 
 @dataclass
@@ -75,6 +81,7 @@ class Frame:
     problem: str | None
     clause: str | None
     t: float
+    undecided: bool = False  # ``problem`` says why the frame was not judged, not what it breaks
 
 
 @dataclass
@@ -85,6 +92,7 @@ class _Step:
     tries: int = 1
     replies: list = field(default_factory=list)
     malformed: int = 0
+    unjudged: int = 0  # frames of the awaited message the suite could not judge
     terminal: Parsed | None = None
     failures: dict = field(default_factory=dict)  # check -> first detail
     seen: list = field(default_factory=list)  # data already received, to tell duplicates
@@ -107,6 +115,7 @@ class Machine:
         self.backlog: list[Parsed] = []  # replies to a request a later step awaits
         self.acks: dict[str, str | None] = {}  # send or setup step -> why the target refused its call, or None
         self.released = False  # its resources are free for another scenario (a released sequence ended)
+        self.impairments: list[str] = []  # what the link could not show while the scenario ran
         self.t0 = 0.0
         self.index = -1
         self.step: _Step | None = None
@@ -136,7 +145,8 @@ class Machine:
         if self.done:
             return []
         if self.watches(parsed) or adopt or parsed.problem:
-            self.frames.append(Frame(len(self.frames) + 1, parsed.message, parsed.problem, parsed.clause, self._rel(t)))
+            self.frames.append(Frame(len(self.frames) + 1, parsed.message, parsed.problem, parsed.clause, self._rel(t),
+                                     parsed.undecided))
         owner = self._answered_step(parsed)
         if owner is not None and owner != (self.step.spec.get("reply_to") if self.step else None):
             later = owner in [s.get("reply_to") for s in self.program.scenario["steps"][self.index + 1:]]
@@ -155,8 +165,9 @@ class Machine:
                           else f"malformed: {parsed.problem}")
             return []
         if parsed.decoded is None:
-            step.malformed += 1
-            self._log(t, "received", parsed, f"malformed: {parsed.problem}")
+            step.malformed += not parsed.undecided
+            step.unjudged += parsed.undecided
+            self._log(t, "received", parsed, f"{'not judged' if parsed.undecided else 'malformed'}: {parsed.problem}")
             return []
         if any(parsed.data == d for d in step.seen):
             self._log(t, "duplicate", parsed, "a byte-identical copy of an earlier datagram (tolerated)")
@@ -164,6 +175,15 @@ class Machine:
         step.seen.append(parsed.data)
         getattr(self, "_on_" + step.kind)(t, step, parsed)
         return self._advance(t, epoch) if self._finished(t, step) else []
+
+    def impaired(self, t: float, why: str) -> None:
+        """The link could not show everything while the scenario ran (``why``: e.g. the kernel dropped datagrams):
+        a step failing for want of a frame is then INCONCLUSIVE."""
+        if self.done:
+            return
+        if why not in self.impairments:
+            self.impairments.append(why)
+        self.timeline.append({"t": self._rel(t), "event": "impaired", "note": why})
 
     def wake(self, t: float, epoch: float) -> list[Composed]:
         step = self.step
@@ -184,8 +204,9 @@ class Machine:
     def _advance(self, t: float, epoch: float) -> list[Composed]:
         out: list[Composed] = []
         while not self.done:
-            if self.step is not None and self._must_failed():
-                self._stop(t, "a MUST step failed; the rest of the scenario was not run")
+            failed = self._must_failed() if self.step is not None else None
+            if failed:
+                self._stop(t, f"a MUST step {failed}; the rest of the scenario was not run")
                 break
             self.index += 1
             steps = self.program.scenario["steps"]
@@ -286,8 +307,12 @@ class Machine:
         return not any(k in later for later in self.program.scenario["steps"][self.index + 1:]
                        for k in ("expect", "sequence", "silence", "alive", "accepted", "send", "setup"))
 
-    def _must_failed(self) -> bool:
-        return any(not f.passed and f.level == "MUST" for f in self.findings)
+    def _must_failed(self) -> str | None:
+        """Whether a MUST step failed ("failed") or could not be judged ("could not be judged")."""
+        failed = [f for f in self.findings if not f.passed and f.level == "MUST"]
+        if not failed:
+            return None
+        return "could not be judged" if all(f.inconclusive for f in failed) else "failed"
 
     def cannot_run(self, t: float, why: str) -> None:
         """The session could not send what the scenario sent: it stops, untested (not the node's fault)."""
@@ -443,14 +468,16 @@ class Machine:
             malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
             refused = self.acks.get(spec.get("reply_to"))
             refused = f"; the call was refused: {refused}" if refused else ""
-            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}{refused}{_unmatched(step)}")
+            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}{refused}{_unmatched(step)}",
+                       blind=self._blind(step))
         self.timeline.append({"t": self._rel(t), "event": "timer", "step": spec["id"], "note": "the step's time is up"})
 
     def _judge_sequence(self, step: _Step, bound) -> None:
         spec = step.spec
         if not step.replies:
             malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
-            self._find(step, "", False, f"no {spec['sequence']} within {bound} s{malformed}{_unmatched(step)}")
+            self._find(step, "", False, f"no {spec['sequence']} within {bound} s{malformed}{_unmatched(step)}",
+                       blind=self._blind(step))
             return
         self._find(step, "", True, f"{len(step.replies)} {spec['sequence']} received")
         states = (self._exchange(step) or {}).get("state", {})
@@ -462,7 +489,7 @@ class Machine:
         clause = states.get("clause")
         if step.terminal is None:
             self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})",
-                       step.spec.get("level", "MUST"), clause)
+                       step.spec.get("level", "MUST"), clause, blind=self._blind(step))
         else:
             bad = self._match_fields(spec["sequence"], spec.get("terminal", {}), step.terminal)
             self._find(step, "terminal", bad is None, bad or f"ended in {self._terminal_name(step)} ({trail})",
@@ -477,11 +504,21 @@ class Machine:
     # ------------------------------------------------------------------ helpers
 
     def _find(self, step: _Step, what: str, passed: bool, detail: str, level: str | None = None,
-              clause: str | None = None) -> None:
+              clause: str | None = None, blind: str | None = None) -> None:
+        """Record a check of the step; ``blind``: why a failure for want of a frame cannot be judged."""
         spec = step.spec
         check = f"step:{spec['id']}" + (f":{what}" if what else "")
+        inconclusive = not passed and blind is not None
         self.findings.append(Finding(check, passed, level or spec.get("level", "MUST"),
-                                     clause or spec.get("clause") or self.program.scenario["clause"], detail))
+                                     clause or spec.get("clause") or self.program.scenario["clause"],
+                                     f"{detail}; not judged: {blind}" if inconclusive else detail, inconclusive))
+
+    def _blind(self, step: _Step) -> str | None:
+        """Why the session may have missed what the step waited for, or None."""
+        why = list(self.impairments)
+        if step.unjudged:
+            why.append(f"{step.unjudged} frame(s) of it could not be judged")
+        return "; ".join(why) or None
 
     def _bound(self, seconds) -> float:
         return float(seconds) * self.program.time_scale

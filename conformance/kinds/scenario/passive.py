@@ -5,7 +5,9 @@ node than the one asked answers nothing: the request it leaves unanswered is the
 
 Requests are matched to replies as the scenario engine does, by the exchange's echo fields. A capture can
 begin in the middle of an exchange or miss a frame, so a reply that echoes no request seen is set aside; it
-is a finding only when a request of its addressee then goes unanswered (the reply did not echo it).
+is a finding only when a request of its addressee then goes unanswered (the reply did not echo it). Where the
+watcher says it lost datagrams (``lost``: the kernel dropped them), a request left unanswered while they were
+lost is INCONCLUSIVE: its reply may be among them.
 """
 
 from __future__ import annotations
@@ -62,6 +64,7 @@ class PassiveExchanges:
         self.pairs: set[tuple] = set()  # (rule, requester, node) of every request seen
         self.senders: dict = {}  # system id -> the address and port its frames come from
         self.next_deadline = float("inf")
+        self.losses: list[tuple[float, float]] = []  # (from, to): times within which datagrams were lost
 
     @property
     def messages(self) -> set[str]:
@@ -91,6 +94,10 @@ class PassiveExchanges:
         the same message), so it is no new request."""
         return any(_matches(w.fields, rule.reply_when) and (id(rule), w.dst, w.src) in self.pairs
                    for rule in self.by_reply.get(w.message, ()))
+
+    def lost(self, start: float, end: float) -> None:
+        """Datagrams were lost between ``start`` and ``end`` (a watcher's receive buffer overflowed)."""
+        self.losses.append((start, end))
 
     def finish(self, end: float) -> list[Finding]:
         """Judge what the end of the capture decides; a request whose bound reaches past it is INCONCLUSIVE."""
@@ -199,6 +206,14 @@ class PassiveExchanges:
         return out
 
     def _judge_expired(self, o: _Open) -> list[Finding]:
+        findings = self._expired(o)
+        if any(start <= o.deadline and end >= o.request.time for start, end in self.losses):
+            for f in findings:  # the reply, or the right one, may have been lost
+                if f.verdict in (Verdict.FAIL, Verdict.NON_STRICT):
+                    f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: datagrams were lost meanwhile"
+        return findings
+
+    def _expired(self, o: _Open) -> list[Finding]:
         ex, bound = o.rule.exchange, o.deadline - o.request.time
         if not o.answered:
             self.keyed[(id(o.rule), o.key)].remove(o)

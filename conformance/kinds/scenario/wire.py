@@ -31,7 +31,8 @@ class Addressing:
 class Parsed:
     """One thing received. ``message``: its message name when known, even from a malformed frame's header;
     ``decoded``: its decoded form (``fields``, and ``header`` where the protocol has one) if well formed;
-    ``problem`` and ``clause``: why it is malformed and the rule it breaks."""
+    ``problem`` and ``clause``: why it is malformed and the rule it breaks; ``undecided``: ``problem`` says why
+    the suite could not judge it (a bound it keeps), not what it breaks."""
 
     data: object
     message: str | None
@@ -39,6 +40,7 @@ class Parsed:
     problem: str | None = None
     clause: str | None = None
     encoding: str | None = None
+    undecided: bool = False
 
     @property
     def fields(self) -> dict:

@@ -13,6 +13,15 @@ class FrameError(ValueError):
         self.rule, self.offset, self.detail = rule, offset, detail
 
 
+class NotJudged(ValueError):
+    """Bytes the reference codec does not judge, valid or not, because they lie beyond a bound the suite keeps
+    (``reason``, e.g. ``nested-too-deep``): every path gives them the same verdict, INCONCLUSIVE."""
+
+    def __init__(self, reason: str, offset: int, detail: str):
+        super().__init__(f"{reason} at byte {offset}: {detail}")
+        self.reason, self.offset, self.detail = reason, offset, detail
+
+
 class EncodeError(ValueError):
     """A message the codec refuses to encode, with the rule id it would break."""
 

@@ -14,10 +14,10 @@ from .crc16 import crc16 as arc
 
 from ...capture.findings import Frame
 from ...kinds.scenario.passive import PassiveExchanges
-from ...kinds.vector.errors import FrameError
+from ...kinds.vector.errors import FrameError, NotJudged
 from . import codec
 from .definitions import Definitions
-from .wire import UNKNOWN_SYSTEM, ImcWire
+from .wire import NOT_JUDGED_CLAUSE, UNKNOWN_SYSTEM, ImcWire
 
 PORTS = frozenset([*range(6001, 6031), *range(30100, 30105)])  # DUNE's node ports and its discovery ports
 SEEN_LIMIT = 1 << 16  # decoded payloads remembered (repeated statuses and requests decode once)
@@ -83,9 +83,8 @@ class ImcCaptureRules:
             decoded = codec.decode(self.defs, p)
         except FrameError as exc:
             return Frame(group, exc.rule, exc.offset, exc.detail, self.clauses.get(exc.rule, ""))
-        except RecursionError:  # valid IMC, but nested deeper than the reference codec (Python) follows
-            return Frame(group, "nested-too-deep", codec.HEADER_SIZE, "inline messages nested deeper than the "
-                         "reference codec follows: not judged", "imc-wire#field-types", undecided=True)
+        except NotJudged as exc:
+            return Frame(group, exc.reason, exc.offset, exc.detail, NOT_JUDGED_CLAUSE, undecided=True)
         header = decoded["header"]
         return Frame(group, fields=decoded["fields"], src=header["src"], dst=header["dst"])
 
@@ -101,6 +100,6 @@ class ImcCaptureRules:
             case["message"] = codec.decode(self.defs, data)
         except FrameError as exc:
             return case | {"expect": "invalid", "rule": exc.rule, "clause": self.clauses.get(exc.rule, case["clause"])}
-        except RecursionError:
-            return None  # nested deeper than the reference codec follows: no verdict to compare with
+        except NotJudged:
+            return None  # beyond the reference codec's bounds: no verdict to compare with
         return case | {"expect": "valid"}

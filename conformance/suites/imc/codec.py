@@ -2,7 +2,9 @@
 
 ``encode`` turns a message in the corpus's decoded form into a frame in either byte order;
 ``decode`` checks a frame in DUNE's order (header length, sync, size, CRC, id, fields) and raises
-``FrameError`` naming the broken rule and the byte offset. ``layout`` names the bytes of a frame.
+``FrameError`` naming the broken rule and the byte offset. ``layout`` names the bytes of a frame. Inline
+messages are followed to ``NESTING_LIMIT`` levels both ways: a frame nested deeper is ``NotJudged`` (an
+input cannot drive the recursion), a message nested deeper is refused.
 """
 
 from __future__ import annotations
@@ -10,7 +12,8 @@ from __future__ import annotations
 import struct
 
 from ...kinds.vector import Span
-from ...kinds.vector.errors import EncodeError, FrameError
+from ...kinds.vector.errors import EncodeError, FrameError, NotJudged
+from ...limits import NESTING_LIMIT
 from .crc16 import crc16
 from .definitions import SCALAR_FORMATS, Definitions, FieldDef, MessageDef
 from ...kinds.vector.floats import float_from_bits, float_to_bits
@@ -49,7 +52,7 @@ def encode(defs: Definitions, message: dict, byte_order: str = "le") -> bytes:
     return body + struct.pack(e + "H", crc16(body))
 
 
-def encode_payload(defs: Definitions, mdef: MessageDef, fields: dict, e: str) -> bytes:
+def encode_payload(defs: Definitions, mdef: MessageDef, fields: dict, e: str, depth: int = 0) -> bytes:
     unknown = set(fields) - {f.abbrev for f in mdef.fields}
     if unknown:
         raise EncodeError("unknown-field", f"{mdef.abbrev} has no field {sorted(unknown)[0]!r}")
@@ -57,11 +60,11 @@ def encode_payload(defs: Definitions, mdef: MessageDef, fields: dict, e: str) ->
     for f in mdef.fields:
         if f.abbrev not in fields:
             raise EncodeError("missing-field", f"{mdef.abbrev}.{f.abbrev} is missing")
-        out += encode_field(defs, mdef, f, fields[f.abbrev], e)
+        out += encode_field(defs, mdef, f, fields[f.abbrev], e, depth)
     return bytes(out)
 
 
-def encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str) -> bytes:
+def encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str, depth: int = 0) -> bytes:
     where = f"{mdef.abbrev}.{f.abbrev}"
     try:
         if f.is_float:
@@ -79,25 +82,27 @@ def encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str
                 raise EncodeError("size-limit", f"{where}: {len(data)} bytes exceed a u16 length")
             return struct.pack(e + "H", len(data)) + data
         if f.type == "message":
-            return _encode_inline(defs, value, e, where)
+            return _encode_inline(defs, value, e, where, depth)
         if value is None or not isinstance(value, list):
             raise EncodeError("value-type", f"{where}: a message-list must be an array")
         if len(value) > 0xFFFF:
             raise EncodeError("size-limit", f"{where}: {len(value)} elements exceed a u16 count")
-        return struct.pack(e + "H", len(value)) + b"".join(_encode_inline(defs, v, e, where) for v in value)
+        return struct.pack(e + "H", len(value)) + b"".join(_encode_inline(defs, v, e, where, depth) for v in value)
     except ValueError as exc:
         if isinstance(exc, EncodeError):
             raise
         raise EncodeError("value-type", f"{where}: {exc}") from exc
 
 
-def _encode_inline(defs: Definitions, value, e: str, where: str) -> bytes:
+def _encode_inline(defs: Definitions, value, e: str, where: str, depth: int) -> bytes:
     if value is None:
         return struct.pack(e + "H", defs.null_id)
     if not isinstance(value, dict):
         raise EncodeError("value-type", f"{where}: an inline message must be an object or null")
+    if depth >= NESTING_LIMIT:
+        raise EncodeError("value-type", f"{where}: inline messages nested deeper than {NESTING_LIMIT} levels")
     inner = _message_def(defs, value.get("abbrev"))
-    return struct.pack(e + "H", inner.id) + encode_payload(defs, inner, value.get("fields", {}), e)
+    return struct.pack(e + "H", inner.id) + encode_payload(defs, inner, value.get("fields", {}), e, depth + 1)
 
 
 def _message_def(defs: Definitions, abbrev) -> MessageDef:
@@ -152,6 +157,7 @@ class _Reader:
     def __init__(self, defs: Definitions, frame: bytes, e: str, end: int, spans: list[Span] | None):
         self.defs, self.frame, self.e, self.end, self.spans = defs, frame, e, end, spans
         self.pos = HEADER_SIZE
+        self.depth = 0
 
     def _take(self, count: int, rule: str, what: str) -> int:
         start = self.pos
@@ -199,4 +205,10 @@ class _Reader:
         inner = self.defs.by_id.get(mgid)
         if inner is None:
             raise FrameError("unknown-inline-id", id_start, f"{path} holds unknown message id {mgid}")
-        return {"abbrev": inner.abbrev, "fields": self.fields(inner, self.pos, f"{path}.{inner.abbrev}")}
+        if self.depth >= NESTING_LIMIT:
+            raise NotJudged("nested-too-deep", id_start, f"inline messages nested deeper than {NESTING_LIMIT} levels, "
+                                                         "the reference codec's bound: not judged")
+        self.depth += 1
+        fields = self.fields(inner, self.pos, f"{path}.{inner.abbrev}")
+        self.depth -= 1
+        return {"abbrev": inner.abbrev, "fields": fields}

@@ -7,25 +7,38 @@ it arrived (at once when its id is given: the seeds do not make Heartbeat period
 It also says which frames are for the session: replies are matched on the header, not on the socket they
 arrive at, because a node like DUNE sends what its UDP transport lists to every contact. Frames the session
 itself sent (echoed back) and frames addressed to another system (the node's own internal messages) are not
-for it; frames to the session's id, to anyone (0xFFFF) or to 0 (DUNE addresses Announce so) are."""
+for it; frames to the session's id, to anyone (0xFFFF) or to 0 (DUNE addresses Announce so) are. A frame sent
+with the session's id is never the node's, and an Announce with its id for another service shows another system
+using that id (two runs with the same --src talking to one node take each other's replies)."""
 
 from __future__ import annotations
 
 from .definitions import Definitions
 from . import codec
+from .values import text_bytes
 
 DISCOVERY_PORTS = range(30100, 30105)
-DEFAULT_SYSTEM = 0x4CF0  # the session's IMC id unless --src: outside DUNE's and Neptus' usual ranges
+DEFAULT_SYSTEM = 0x4CF0  # the session's IMC id in tests and in recordings made before ids were chosen per run
+SYSTEMS = range(0x4C01, 0x4CFF)  # the ids a run chooses from: outside DUNE's and Neptus' usual ranges
 ANNOUNCE_EVERY, HEARTBEAT_EVERY = 10.0, 1.0
+
+
+def session_system(src: int | None, first_unique: int | None) -> int:
+    """The session's IMC id: ``--src`` if given, else one of ``SYSTEMS`` chosen by the run's first unique number
+    (random per run, and recorded, so two runs at once rarely share an id and a replay finds the same one)."""
+    if src is not None:
+        return src
+    return DEFAULT_SYSTEM if first_unique is None else SYSTEMS[first_unique % len(SYSTEMS)]
 
 
 class ImcPeer:
     def __init__(self, defs: Definitions, *, system: int, node: int | None, service: str, host: str, epoch,
-                 name: str = "imc-conformance"):
+                 name: str = "imc-conformance", chosen: bool = False):
         """``service``: the session's own imc+udp URL; ``host``: the target's host (for discovery ports);
-        ``epoch(t)``: seconds since 1970 at clock time t."""
+        ``epoch(t)``: seconds since 1970 at clock time t; ``chosen``: the id was chosen for the run, not given."""
         self.defs, self.system, self.node, self.service, self.host = defs, system, node, service, host
         self.epoch, self.name = epoch, name
+        self.notes = [f"the session's IMC id: {system:#06x} (chosen for this run; --src sets one)"] if chosen else []
         self.given = node is not None
         self.ready = self.given
         self.next_beat = self.next_announce = None
@@ -62,6 +75,19 @@ class ImcPeer:
             return True
         header = parsed.decoded["header"]
         return header["src"] != self.system and header["dst"] in (self.system, 0xFFFF, 0)
+
+    def own(self, parsed) -> bool:
+        return parsed.decoded is not None and parsed.decoded["header"]["src"] == self.system
+
+    def impostor(self, parsed) -> str | None:
+        if parsed.decoded is None or parsed.message != "Announce" or not self.own(parsed):
+            return None
+        fields = parsed.decoded["fields"]
+        services = text_bytes(fields.get("services", "")).decode("utf-8", "replace")
+        if services == self.service:
+            return None
+        name = text_bytes(fields.get("sys_name", "")).decode("utf-8", "replace")
+        return f"an Announce with the session's id {self.system:#06x} came from {name!r} at {services[:120]!r}"
 
     def observe(self, t: float, parsed, from_target: bool) -> None:
         """Learn the node's id, and that it is ready, from its valid frames from the target's own address: not

@@ -15,8 +15,8 @@ from ...paths import VECTORS
 from . import codec
 from .compare import Comparator
 from .decoded_form import message_problem
-from .definitions import Definitions, load_definitions
-from ..data_suite import DataSuite
+from .definitions import Definitions, load_definitions, parse_definitions
+from ..data_suite import DataSuite, read_data_file
 from .paths import IMC
 from .wire import ImcWire
 
@@ -60,6 +60,9 @@ class ImcSuite(DataSuite):
     group_label = "message"
     case_folders = {"cases": "vector", "scenarios": "scenario", "robustness": "robustness"}
     packaged = IMC
+    data_schemas = {"definitions.json": "definitions.schema.json", "rules.json": "rules.schema.json",
+                    "exchanges.json": "exchanges.schema.json", "statements.json": "statements.schema.json",
+                    "errata.json": "errata.schema.json"}
 
     def __init__(self, folder: Path, defs: Definitions):
         super().__init__(folder)
@@ -152,4 +155,7 @@ def load(folder: Path | None = None) -> ImcSuite:
     it has one, replace the packaged definitions)."""
     folder = Path(folder) if folder is not None else IMC
     own = folder / "definitions.json"
-    return ImcSuite(folder, load_definitions(own if own.exists() else None))
+    if not own.exists() or own.is_relative_to(IMC):
+        return ImcSuite(folder, load_definitions())
+    doc = read_data_file(own, ImcSuite.data_schemas["definitions.json"], IMC)
+    return ImcSuite(folder, parse_definitions(doc))

@@ -6,13 +6,14 @@ from __future__ import annotations
 import struct
 
 from ...kinds.scenario import Addressing, Composed, Parsed
-from ...kinds.vector.errors import FrameError
+from ...kinds.vector.errors import FrameError, NotJudged
 from . import codec
 from .crc16 import crc16
 from .definitions import Definitions, MessageDef
 
 UNKNOWN_SYSTEM, UNKNOWN_ENTITY = 0xFFFF, 0xFF
 DATAGRAM_LIMIT = 65507  # bytes an IPv4 UDP datagram carries
+NOT_JUDGED_CLAUSE = "imc-wire#field-types"  # what a frame the reference codec does not judge is about (inline messages)
 
 
 class ImcWire:
@@ -39,9 +40,9 @@ class ImcWire:
         except FrameError as exc:
             return Parsed(data, self.named_in_header(data), None, f"{exc.rule} at byte {exc.offset}: {exc.detail}",
                           self.rule_clauses.get(exc.rule), codec.byte_order_of(data))
-        except RecursionError:
-            return Parsed(data, self.named_in_header(data), None, "inline messages nested deeper than the reference "
-                          "codec follows", None, codec.byte_order_of(data))
+        except NotJudged as exc:
+            return Parsed(data, self.named_in_header(data), None, f"{exc.reason} at byte {exc.offset}: {exc.detail}",
+                          NOT_JUDGED_CLAUSE, codec.byte_order_of(data), undecided=True)
         return Parsed(data, decoded["abbrev"], decoded, encoding=codec.byte_order_of(data))
 
     def knows(self, message: str) -> bool:

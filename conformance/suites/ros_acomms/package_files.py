@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
+from ...inputs import read_text
 from .definitions import DefinitionError, Edition
 from .msgtext import msg_text, parse_msg
 
@@ -32,15 +34,42 @@ def package_texts(edition: Edition, package: str = "ros_acomms_msgs",
     return texts, left_out
 
 
-def write_package(edition: Edition, folder: Path) -> tuple[list[Path], list[str]]:
+def write_package(edition: Edition, folder: Path, replace: bool = False) -> tuple[list[Path], list[str]]:
+    """Write the edition's files under ``folder`` (``msg/``, ``srv/``, created if need be); ValueError with one
+    line, before anything is written, if a file is there already (unless ``replace``) or a folder is not one.
+    Nothing is written through a symbolic link: a new file is created exclusively, a replaced one swapped in."""
     texts, left_out = package_texts(edition)
+    folder = Path(folder)
+    paths = {name: folder / name for name in texts}
+    for sub in {folder, *(p.parent for p in paths.values())}:
+        if sub.is_symlink() and sub != folder:
+            raise ValueError(f"{sub} is a symbolic link: the files go into real folders only")
+        if sub.exists() and not sub.is_dir():
+            raise ValueError(f"{sub} is not a folder")
+    present = [p for p in paths.values() if p.exists() or p.is_symlink()]
+    if present and not replace:
+        raise ValueError(f"{len(present)} of the files are there already (e.g. {present[0]}): give --replace to "
+                         "replace them, or another folder")
     written = []
-    for name, text in texts.items():
-        path = Path(folder) / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text, encoding="utf-8")
-        written.append(path)
+    try:
+        for name, text in texts.items():
+            path = paths[name]
+            path.parent.mkdir(parents=True, exist_ok=True)
+            _write_new(path.with_name(path.name + ".new") if replace else path, text.encode("utf-8"))
+            if replace:
+                os.replace(path.with_name(path.name + ".new"), path)  # swaps a link for the file, never writes through
+            written.append(path)
+    except OSError as exc:
+        raise ValueError(f"cannot write under {folder}: {exc.strerror or exc}"
+                         + (f" ({exc.filename})" if exc.filename else "")) from None
     return written, left_out
+
+
+def _write_new(path: Path, data: bytes) -> None:
+    """Create ``path`` (it must not exist, not even as a link) and write ``data``."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644)
+    with os.fdopen(fd, "wb") as out:
+        out.write(data)
 
 
 def read_package(folder: Path, package: str = "ros_acomms_msgs") -> dict[str, str]:
@@ -50,9 +79,9 @@ def read_package(folder: Path, package: str = "ros_acomms_msgs") -> dict[str, st
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"{folder}: no such directory")
-    found = [(path.stem, path.read_text(encoding="utf-8"), path) for path in sorted(folder.glob("msg/*.msg"))]
+    found = [(path.stem, read_text(path), path) for path in sorted(folder.glob("msg/*.msg"))]
     for path in sorted(folder.glob("srv/*.srv")):
-        request, sep, response = path.read_text(encoding="utf-8").partition("\n---")
+        request, sep, response = read_text(path).partition("\n---")
         if not sep:
             raise ValueError(f"{path}: a .srv needs a '---' line between request and response")
         found += [(f"{path.stem}Request", request + "\n", path), (f"{path.stem}Response", response.partition("\n")[2], path)]

@@ -11,10 +11,10 @@ from ...kinds.scenario import ScenarioKind
 from ...kinds.vector import VectorKind
 from ...paths import VECTORS
 from . import codec, forms
-from .definitions import DefinitionError, RosDefinitions, load_definitions
+from .definitions import DefinitionError, RosDefinitions, load_definitions, parse_definitions
 from .msgtext import expected_types, parse_full_text, text_differences
 from .package_files import write_package
-from ..data_suite import DataSuite
+from ..data_suite import DataSuite, read_data_file
 from .paths import ROS
 from .wire import RosWire
 
@@ -71,6 +71,9 @@ class RosSuite(DataSuite):
     group_label = "type"
     case_folders = {"cases": "vector", "scenarios": "scenario"}
     packaged = ROS
+    data_schemas = {"definitions.json": "ros_acomms-definitions.schema.json", "rules.json": "rules.schema.json",
+                    "exchanges.json": "exchanges.schema.json", "statements.json": "statements.schema.json",
+                    "errata.json": "ros_acomms-errata.schema.json"}
 
     def __init__(self, folder: Path, defs: RosDefinitions):
         super().__init__(folder)
@@ -138,10 +141,15 @@ class RosSuite(DataSuite):
         files = subparsers.add_parser("ros-msg-files", help="write ros_acomms_msgs .msg and .srv files of an edition")
         files.add_argument("folder", type=Path, help="where to write msg/ and srv/ (created if need be)")
         files.add_argument("--edition", default=self.editions[0], choices=self.editions)
+        files.add_argument("--replace", action="store_true", help="replace files that are there already")
         files.set_defaults(func=lambda args: self._write_package(args))
 
     def _write_package(self, args) -> int:
-        written, left_out = write_package(self.defs.edition(args.edition), args.folder)
+        from ...usage import UsageError
+        try:
+            written, left_out = write_package(self.defs.edition(args.edition), args.folder, args.replace)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
         print(f"wrote {len(written)} files under {args.folder}" +
               (f"; left out of edition {args.edition}: {', '.join(left_out)}" if left_out else ""))
         return 0
@@ -151,4 +159,11 @@ def load(folder: Path | None = None) -> RosSuite:
     """The ros_acomms suite over its packaged data, or over a suite folder given instead."""
     folder = Path(folder) if folder is not None else ROS
     own = folder / "definitions.json"
-    return RosSuite(folder, load_definitions(own if own.exists() else None))
+    if not own.exists() or own.is_relative_to(ROS):
+        return RosSuite(folder, load_definitions())
+    doc = read_data_file(own, RosSuite.data_schemas["definitions.json"], ROS)
+    try:
+        return RosSuite(folder, parse_definitions(doc))
+    except DefinitionError as exc:
+        from ...files import CorpusError
+        raise CorpusError(f"{own}: {exc}") from None

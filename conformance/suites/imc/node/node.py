@@ -1,6 +1,10 @@
 """The reference node: what the seeds say a node does, sans-IO (the caller says what time it is and moves the
 datagrams). It behaves like DUNE where the seeds are silent: it talks only to systems that announced an
-``imc+udp`` service, heart-beats to them at 1 Hz and announces itself to them (unicast only) every 10 s.
+``imc+udp`` service, heart-beats to them at 1 Hz and announces itself to them (unicast only) every 10 s. A
+hostile link cannot stall it: a service naming a host rather than an address is ignored (nothing is ever
+resolved), a contact not heard from for ``CONTACT_TTL`` seconds is forgotten and at most ``MAX_CONTACTS`` are
+kept (a flood of spoofed Announces cannot push out a contact that keeps talking), and a frame the reference
+codec does not judge (nested too deep) is dropped and counted like a malformed one.
 
 Acoustic operations go over a simulated channel: each peer has a range, a reply takes the two-way travel
 time at 1500 m/s, and the modem is busy until the operation ends. Iridium and SMS go to fake gateways that
@@ -11,12 +15,14 @@ the requests and replies of idempotent exchanges (exchanges.json), which a scena
 from __future__ import annotations
 
 import heapq
+import ipaddress
 import itertools
 import random
 import re
 import struct
 
 from .. import codec
+from ....kinds.vector.errors import NotJudged
 from ..crc16 import crc16
 from ..definitions import Definitions
 from ....kinds.vector.floats import as_float
@@ -30,6 +36,8 @@ PROCESSING = 0.005  # s the node takes to answer anything
 UNKNOWN_SYSTEM, UNKNOWN_ENTITY = 0xFFFF, 0xFF
 ACOUSTIC_ENTITY = 43
 SERVICE_URL = re.compile(r"imc\+udp://([^:/;]+|\[[0-9a-fA-F:]+\]):([0-9]+)/?")
+MAX_CONTACTS = 64
+CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
 
 
 class ReferenceNode:
@@ -47,11 +55,14 @@ class ReferenceNode:
         self.queue: list = []
         self.order = itertools.count()
         self.contacts: dict[int, tuple[str, int]] = {}
+        self.heard_at: dict[int, float] = {}  # when each contact last sent a valid frame
+        self.refused = 0  # Announces ignored: a host name for an address, or the contact table full
         self.modem_free_at = 0.0
         self.beacons: list = []
         self.kept: list[dict] = []  # RemoteCommands kept for resending
         self.acoustic_dead = False
         self.dropped = 0  # datagrams that did not decode
+        self.unjudged = 0  # frames beyond the reference codec's bounds (nested too deep), dropped as well
         self.next_beat = self.next_announce = None
 
     # ------------------------------------------------------------------ the caller's interface
@@ -66,6 +77,9 @@ class ReferenceNode:
         """A datagram arrived from ``source`` (malformed ones are dropped silently, as DUNE does)."""
         try:
             message = codec.decode(self.defs, data)
+        except NotJudged:
+            self.unjudged += 1
+            return
         except ValueError:
             self.dropped += 1
             return
@@ -75,6 +89,8 @@ class ReferenceNode:
         if self.broken == "ignores-big-endian" and order == "be":
             return
         src = message["header"]["src"]
+        if src in self.contacts:
+            self.heard_at[src] = t
         if message["abbrev"] == "Announce":
             self._contact(t, src, _text(message["fields"]["services"]), source)
             return
@@ -87,6 +103,8 @@ class ReferenceNode:
     def due(self, t: float) -> list[tuple[tuple, bytes]]:
         """The datagrams to send by time ``t``: (destination address, bytes)."""
         out = []
+        for src in [s for s, heard in self.heard_at.items() if t - heard > CONTACT_TTL]:
+            del self.contacts[src], self.heard_at[src]
         if self.next_beat is not None and self.next_beat <= t:
             self.next_beat = t + 1.0
             if self.broken != "no-heartbeat":
@@ -103,9 +121,19 @@ class ReferenceNode:
 
     def _contact(self, t: float, src: int, services: str, source: tuple) -> None:
         for host, port in SERVICE_URL.findall(services):
-            address = (host.strip("[]"), int(port))
+            try:
+                address = (str(ipaddress.ip_address(host.strip("[]"))), int(port))
+            except ValueError:  # a name: resolving it would stall the node (and could go anywhere)
+                self.refused += 1
+                continue
+            if not 0 < address[1] < 0x10000:
+                self.refused += 1
+                continue
             fresh = src not in self.contacts
-            self.contacts[src] = address
+            if fresh and len(self.contacts) >= MAX_CONTACTS:
+                self.refused += 1
+                return
+            self.contacts[src], self.heard_at[src] = address, t
             if fresh:
                 self._later(t, PROCESSING, address, self._announce(t))
                 self.next_beat = t if self.next_beat is None else self.next_beat

@@ -7,7 +7,7 @@ import socket
 import sys
 import time
 
-from ....sessions.udp import MAX_DATAGRAM, bound_socket, group_address, resolve
+from ....sessions.udp import MAX_DATAGRAM, bound_socket, group_address, resolve, url
 from .breaks import BREAKS
 from .node import ReferenceNode
 
@@ -99,11 +99,14 @@ def command_serve(args, suite) -> int:
     node = ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=sock.getsockname()[:2], name=name,
                          system=system, peers=peers, loss=args.loss, dup=args.dup, seed=args.seed, broken=args.broken,
                          epoch0=offset)
-    print(f"reference IMC node {name} (0x{system:04X}, {edition}) on udp://{args.host}:{sock.getsockname()[1]}"
+    print(f"reference IMC node {name} (0x{system:04X}, {edition}) on {url(*sock.getsockname()[:2])}"
           + (f", broken: {args.broken}" if args.broken else "") + "; Ctrl-C stops it", file=sys.stderr, flush=True)
     try:
         serve_forever(sock, node)
     except KeyboardInterrupt:
+        print(f"stopped; dropped {node.dropped} malformed datagrams and {node.unjudged} nested deeper than the "
+              f"reference codec follows; ignored {node.refused} announced services (names, or the contact table full)",
+              file=sys.stderr)
         return 0
     finally:
         sock.close()

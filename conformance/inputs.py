@@ -1,0 +1,51 @@
+"""Reading what comes from outside the suite (a user's files, a recording's comments): bounded in size and in
+nesting, every problem a ``ValueError`` of one line.
+
+Any file may be a device or a pipe (``/dev/zero`` is a file): at most ``limit`` bytes are read, whatever it is.
+JSON nested deeper than the parser follows (Python's JSON decoder recurses) is refused, not a traceback.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from .limits import FILE_LIMIT
+
+
+def read_bytes(path: Path, limit: int = FILE_LIMIT) -> bytes:
+    """At most ``limit`` bytes of ``path``; ValueError naming it if it cannot be read or holds more."""
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(limit + 1)
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise ValueError(f"{path}: larger than {limit >> 20} MB, the most the suite reads from one file")
+    return data
+
+
+def read_text(path: Path, limit: int = FILE_LIMIT) -> str:
+    """``path`` as UTF-8 text (bounded as ``read_bytes``); ValueError if it is not UTF-8."""
+    try:
+        return read_bytes(path, limit).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+
+
+def parse_json(raw: bytes | str, where: str):
+    """The JSON value of ``raw``; ValueError naming ``where`` if it is not JSON or nests too deeply."""
+    try:
+        return json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{where}: not JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
+    except RecursionError:
+        raise ValueError(f"{where}: JSON nested too deeply to read") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{where}: not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+
+
+def read_json(path: Path, limit: int = FILE_LIMIT) -> tuple[bytes, object]:
+    """The bytes of a JSON file and its value; ValueError with the reason."""
+    raw = read_bytes(path, limit)
+    return raw, parse_json(raw, str(path))

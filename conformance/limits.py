@@ -1,0 +1,11 @@
+"""Every bound on what a user, an implementation, a node or a capture may give the suite, in one place: the
+command line refuses what the readers would refuse (a run records only what ``pcap`` reads back), and every
+reader of untrusted input stops at its bound with a one-line reason."""
+
+from __future__ import annotations
+
+STARTUP_MAX = 3600.0  # seconds a live run waits for its target to show itself
+TIME_SCALE_MAX = 1000.0  # the factor on a live run's time bounds (--time-scale)
+FILE_LIMIT = 256 << 20  # bytes of a JSON or text file the suite reads (claims, waivers, results, corpus files)
+PIPE_LIMIT = 1 << 30  # bytes of a capture read from a pipe or a device
+NESTING_LIMIT = 64  # inline messages within inline messages that a decoder follows (the corpus needs 4)
