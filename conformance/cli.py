@@ -177,7 +177,7 @@ def command_run(args) -> int:
     result = None
     try:
         with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                      console=Console(stderr=True), transient=True, disable=args.no_progress) as bar:
+                      console=Console(stderr=True, emoji=False), transient=True, disable=args.no_progress) as bar:
             task = bar.add_task("running", total=None)
             result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
                                waivers=waivers, strict=args.strict, notes=notes + live.notes(args, options),
@@ -283,10 +283,11 @@ def command_generate(args) -> int:
 
 
 def terminal():
-    """A rich console; CI logs (not a terminal) get a wide table instead of rich's 80 columns."""
+    """A rich console that interprets nothing it is given (no emoji codes, no highlighting; markup is escaped by
+    the renderer); CI logs (not a terminal) get a wide table instead of rich's 80 columns."""
     from rich.console import Console
 
-    return Console(highlight=False, width=None if sys.stdout.isatty() else 160)
+    return Console(highlight=False, emoji=False, width=None if sys.stdout.isatty() else 160)
 
 
 def add_suite(parser) -> None:

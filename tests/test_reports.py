@@ -213,7 +213,7 @@ def test_junit_escapes_implementation_text(hostile_result):
     assert kept in root.get("name")
     assert root.find("testsuite/system-err").text.startswith(kept)
     failure = root.find(f".//testcase[@name='{FAILING_CASE}']/failure")
-    assert kept in failure.get("message") and "red a|b `tick` & done" in failure.text
+    assert kept in failure.get("message") and "\\x00 \\x1b[31mred\\x1b[0m a|b `tick` & done" in failure.text
     assert root.find("testsuite/properties/property[@name='implementation']").get("value").startswith(kept)
 
 
@@ -367,3 +367,52 @@ def test_html_report_in_headless_chromium(broken_result, tmp_path):
     chromium(f"--screenshot={shot}", "--window-size=1400,2400", url, profile=tmp_path / "profile-shot")
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert shot.stat().st_size > 10_000
+
+
+# --- one escaping policy for every renderer --------------------------------------------------------------------
+
+TRICKS = ("evil \u202eTEXT\u202c \u2066iso\u2069 \u200bzero \u061cmark \ufeffbom \u2028sep \ud800lone \U000e0041tag "
+          "\x1b]0;title\x07 \r:skull: :white_check_mark: PASS [bold]markup[/bold] step:heartbeat:")
+RAW_TRICKS = ("\u202e", "\u202c", "\u2066", "\u2069", "\u200b", "\u061c", "\ufeff", "\u2028", "\ud800", "\U000e0041",
+              "\x1b", "\x07", "\r")
+
+
+@pytest.fixture(scope="module")
+def tricky_result(broken_result):
+    """The broken run with bidirectional, invisible and emoji-code text wherever the implementation speaks."""
+    doc = broken_result.to_dict()
+    doc["implementation"] = doc["stderr"] = TRICKS
+    doc["notes"] = [TRICKS]
+    case = next(c for m in doc["messages"] for c in m["cases"] if c["id"] == FAILING_CASE)
+    case["detail"] = TRICKS
+    next(k for k in case["checks"] if k["verdict"] == "FAIL")["detail"] = TRICKS
+    return RunResult.from_dict(doc)
+
+
+def terminal_text(result) -> str:
+    from imc_conformance.cli import terminal
+    from imc_conformance.render.terminal import print_result
+
+    console = terminal()
+    with console.capture() as captured:
+        print_result(result, console)
+    return captured.get()
+
+
+@pytest.mark.parametrize("render", [render_markdown, render_html, render_junit, terminal_text],
+                         ids=["markdown", "html", "junit", "terminal"])
+def test_every_renderer_shows_hidden_and_reordering_characters_as_escapes(tricky_result, render):
+    text = render(tricky_result)
+    assert not [c for c in RAW_TRICKS if c in text]
+    assert "\\u202e" in text and "\\u2066" in text and "\\U000e0041" in text and "\\x1b" in text
+    assert "💀" not in text and "💓" not in text  # emoji codes are text, never emoji
+
+
+def test_the_terminal_interprets_no_emoji_code_and_no_markup(tricky_result):
+    text = terminal_text(tricky_result)
+    assert ":skull: :white_check_mark: PASS [bold]markup[/bold] step:heartbeat:" in text
+
+
+def test_markdown_leaves_no_emoji_code_for_github_to_render(tricky_result):
+    text = render_markdown(tricky_result)
+    assert ":skull:" not in text and ":white" not in text and "&#58;skull&#58;" in text

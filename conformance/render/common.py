@@ -13,21 +13,34 @@ VERDICTS = tuple(Verdict)
 ATTENTION = (*FAILING, Verdict.NON_STRICT, Verdict.INCONCLUSIVE)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
 
-_ANSI = re.compile(r"\x1b\[[0-?]*[ -/]*[@-~]")
-# Controls (C0 but tab, DEL, C1), line and paragraph separators, bidirectional and invisible format characters.
-_UNPRINTABLE = re.compile("[\x00-\x08\x0a-\x1f\x7f-\x9f\u200b-\u200f\u2028-\u202e\u2060-\u206f\ufeff]")
-_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+# The one policy for what an implementation, a node or a capture says, whatever the output (terminal, JSON aside,
+# Markdown, HTML, JUnit): every character that could drive a terminal, reorder or hide text, forge a line or break
+# XML is shown as an escape (``\x1b``, ``\u202e``), and nothing else is changed: controls (C0 but tab and newline,
+# DEL, C1), the Arabic letter mark, zero-width and bidirectional marks, embeddings, overrides and isolates, line and
+# paragraph separators, invisible operators, the byte order mark, interlinear annotations, lone surrogates,
+# non-characters XML forbids and tag characters. Each renderer then escapes its own markup; the terminal also
+# shows newlines as escapes (one line of a log per item).
+_UNSAFE = "\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200b-\u200f\u2028-\u202e\u2060-\u206f\ufeff\ufff9-\ufffb\ufffe\uffff" \
+          "\ud800-\udfff\U000e0000-\U000e007f"
+_UNSAFE_TEXT = re.compile(f"[{_UNSAFE}]")
+_UNSAFE_LINE = re.compile(f"[{_UNSAFE}\n]")
+
+
+def _escape(m: re.Match) -> str:
+    code = ord(m[0])
+    return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}"
 
 
 def clean(text: str | None) -> str:
-    """``text`` without ANSI colour sequences and without characters XML 1.0 forbids (controls, surrogates)."""
-    return _NOT_XML.sub("", _ANSI.sub("", text or ""))
+    """Implementation text for a report (Markdown, HTML, JUnit): the unsafe characters shown as escapes, lines
+    and tabs kept."""
+    return _UNSAFE_TEXT.sub(_escape, text or "")
 
 
 def printable(text: str | None) -> str:
-    """``text`` for a terminal: every control or invisible format character shown as an escape (``\\x1b``,
-    ``\\u202e``), so that implementation text can neither drive the terminal nor forge log lines."""
-    return _UNPRINTABLE.sub(lambda m: f"\\x{ord(m[0]):02x}" if ord(m[0]) < 0x100 else f"\\u{ord(m[0]):04x}", text or "")
+    """Implementation text for a terminal or a log line: as ``clean``, and newlines shown as escapes too, so that
+    it can neither drive the terminal nor forge log lines."""
+    return _UNSAFE_LINE.sub(_escape, text or "")
 
 
 def overall(result: RunResult) -> str:

@@ -18,12 +18,13 @@ MAX_CASES = 50
 MAX_DETAIL = 300
 MAX_TIMELINES = 10  # scenarios whose timeline is shown
 
-_ENTITIES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "&#124;", "`": "&#96;"}
-_SPECIAL = re.compile(r"[&<>|`]|[\\*_\[\]~]")
+_ENTITIES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "&#124;", "`": "&#96;", ":": "&#58;"}  # ":x:" is an emoji
+_SPECIAL = re.compile(r"[&<>|`:]|[\\*_\[\]~]")
 
 
 def cell(text: str, limit: int | None = None) -> str:
-    """``text`` safe inside a table cell: one line, no table breaks, no HTML, no Markdown emphasis or links."""
+    """``text`` safe inside a table cell: one line, no table breaks, no HTML, no Markdown emphasis, links or emoji
+    codes (GitHub renders ``:skull:``)."""
     text = " ".join(clean(text).split())
     if limit and len(text) > limit:
         text = text[:limit - 1] + "…"

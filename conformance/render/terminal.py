@@ -1,7 +1,8 @@
 """The terminal rendering of a run: a table per message, the failing cases, incidents, notes, the summary (rich).
 
 Every piece of text from the result passes ``printable`` (control characters shown as escapes) and rich's
-``escape`` (no markup), so an implementation can neither drive the terminal nor forge lines in a CI log.
+``escape`` (no markup), and the console interprets no emoji codes (``cli.terminal``), so an implementation can
+neither drive the terminal nor forge lines in a CI log.
 """
 
 from __future__ import annotations

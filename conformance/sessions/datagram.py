@@ -144,14 +144,15 @@ class DatagramSession:
             self._losses(arrived, conductor, poll=False)
             impostor = self.peer.impostor(parsed)
             if impostor is not None:
-                self._impaired(arrived, conductor, impostor)
+                self._impostor(arrived, conductor, impostor)
             if parsed.decoded is not None and not self.peer.own(parsed):
                 self.heard += 1
             self.peer.observe(arrived, parsed, tuple(source) == tuple(self.transport.target[:2]))
             if conductor is not None and self.peer.accepts(parsed):
                 self._transmit(conductor.deliver(arrived, parsed))
-                for why in conductor.impostors[len(self.impostors):]:
-                    self._impaired(arrived, conductor, why)
+                for why in conductor.impostors:
+                    if why not in self.impostors:
+                        self.impostors.append(why)
         if conductor is not None and conductor.deadline is not None and conductor.deadline <= t:
             self._losses(t, conductor, poll=True)  # before a step is judged, whatever the kernel dropped since
             if not self.heard:
@@ -169,11 +170,12 @@ class DatagramSession:
             if conductor is not None:
                 conductor.impaired(t, f"the kernel dropped {lost} datagram(s) before the session could read them")
 
-    def _impaired(self, t: float, conductor: Conductor | None, why: str) -> None:
+    def _impostor(self, t: float, conductor: Conductor | None, why: str) -> None:
+        """Another system uses the session's identity: for the rest of the run, a missing reply may be its."""
         if why not in self.impostors:
             self.impostors.append(why)
         if conductor is not None:
-            conductor.impaired(t, why)
+            conductor.impaired(t, why, lasting=True)
 
     def _transmit(self, outgoing) -> None:
         for item in list(outgoing):

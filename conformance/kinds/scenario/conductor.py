@@ -53,6 +53,7 @@ class Conductor:
         self._entities, self._entity = entities, 0
         self._released: set[int] = set()  # machines seen to have released their resources
         self.impostors: list[str] = []  # replies that answer requests this run never sent
+        self.lasting: list[str] = []  # impairments every machine started from now on is told of
 
     @property
     def done(self) -> bool:
@@ -99,6 +100,8 @@ class Conductor:
             self.entities[entity] = job
             machine = program.machine(addressing, self.unique, [programs[j] for j in members])
             self.running[job], self.members[job] = machine, members
+            for why in self.lasting:
+                machine.impaired(t, why)
             out += self._sent(job, machine, machine.start(t, self.epoch(t)))
             if getattr(program, "exclusive", False):
                 break
@@ -111,7 +114,7 @@ class Conductor:
             foreign = self._foreign(parsed)
             if foreign is not None and foreign not in self.impostors:
                 self.impostors.append(foreign)
-                self.impaired(t, foreign)
+                self.impaired(t, foreign, lasting=True)
         if owner is not None:
             targets = [owner] if owner in self.running else []
         else:
@@ -140,9 +143,12 @@ class Conductor:
                 out += self._sent(job, machine, machine.restarted(t, self.epoch(t), problem))
         return out + self._reap(t)
 
-    def impaired(self, t: float, why: str) -> None:
+    def impaired(self, t: float, why: str, lasting: bool = False) -> None:
         """The link could not show everything (``why``): every running machine is told (a step failing for want of
-        a frame is then INCONCLUSIVE)."""
+        a frame is then INCONCLUSIVE); ``lasting``: for the rest of the run (another system using the session's id),
+        so machines started later are told too."""
+        if lasting and why not in self.lasting:
+            self.lasting.append(why)
         for machine in self.running.values():
             machine.impaired(t, why)
 
