@@ -43,7 +43,10 @@ def schema_error(schema: Path, doc, where: str, memo: bytes | None = None) -> st
     known, record = remembered(schema.name, raw, memo) if memo is not None else (False, lambda: None)
     if known:
         return None
-    error = best_match(check.iter_errors(doc))
+    try:
+        error = best_match(check.iter_errors(doc))
+    except RecursionError:
+        return f"{where}: " * bool(where) + "nested too deeply to check"
     if error is None:
         record()
         return None

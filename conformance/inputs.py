@@ -2,7 +2,8 @@
 nesting, every problem a ``ValueError`` of one line.
 
 Any file may be a device or a pipe (``/dev/zero`` is a file): at most ``limit`` bytes are read, whatever it is.
-JSON nested deeper than the parser follows (Python's JSON decoder recurses) is refused, not a traceback.
+JSON nested deeper than ``JSON_NESTING_LIMIT`` is refused, not a traceback: Python's JSON decoder, the schema
+validator and the code that walks a document all recurse.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .limits import FILE_LIMIT
+from .limits import FILE_LIMIT, JSON_NESTING_LIMIT
 
 
 def read_bytes(path: Path, limit: int = FILE_LIMIT) -> bytes:
@@ -33,16 +34,32 @@ def read_text(path: Path, limit: int = FILE_LIMIT) -> str:
         raise ValueError(f"{path}: not UTF-8 text: {exc.reason} at byte {exc.start}") from None
 
 
+def nesting_problem(value, limit: int = JSON_NESTING_LIMIT) -> str | None:
+    """Why a parsed JSON value nests too deeply for the code that walks it, or None (an iterative walk)."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if depth > limit:
+            return f"JSON nested deeper than {limit} levels"
+        children = item.values() if type(item) is dict else item if type(item) is list else ()
+        stack += [(child, depth + 1) for child in children if type(child) in (dict, list)]
+    return None
+
+
 def parse_json(raw: bytes | str, where: str):
     """The JSON value of ``raw``; ValueError naming ``where`` if it is not JSON or nests too deeply."""
     try:
-        return json.loads(raw)
+        value = json.loads(raw)
     except json.JSONDecodeError as exc:
         raise ValueError(f"{where}: not JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
     except RecursionError:
         raise ValueError(f"{where}: JSON nested too deeply to read") from None
     except UnicodeDecodeError as exc:
         raise ValueError(f"{where}: not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+    problem = nesting_problem(value)
+    if problem:
+        raise ValueError(f"{where}: {problem}")
+    return value
 
 
 def read_json(path: Path, limit: int = FILE_LIMIT) -> tuple[bytes, object]:

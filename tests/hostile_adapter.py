@@ -115,6 +115,13 @@ def misbehave(request: dict, reply: dict) -> str | None:
         reply["message"]["fields"]["bogus"] = 1
     elif MODE == "bad-float":
         reply["message"]["fields"]["range"] = "banana"
+    elif MODE == "deep-json":  # JSON nested beyond what any reader follows
+        return '{"id": %d, "ok": true, "message": %s%s}' % (ident, "[" * 100_000, "]" * 100_000)
+    elif MODE == "deep-message":  # a well-formed message nested 90 inline messages deep
+        inner = {"abbrev": "LblRange", "fields": dict(reply["message"]["fields"])}
+        for _ in range(90):
+            inner = {"abbrev": "AcousticMessage", "fields": {"message": inner}}
+        reply["message"]["fields"]["range"] = inner
     elif MODE == "hostile-text":
         return json.dumps({"id": ident, "ok": False, "error": "refused " + EVIL})
     elif MODE == "partial-line":

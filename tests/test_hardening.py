@@ -440,6 +440,8 @@ PROBE = [  # mode, the trigger case's verdict (None: the run never starts), exit
     ("unknown-message", "ADAPTER_ERROR", 2),
     ("extra-field", "ADAPTER_ERROR", 2),
     ("bad-float", "ADAPTER_ERROR", 2),
+    ("deep-json", "ADAPTER_ERROR", 2),
+    ("deep-message", "ADAPTER_ERROR", 2),
     ("once-garbage", "PASS", 2),
     ("once-wrong-id", "PASS", 2),
     ("once-huge", "PASS", 2),

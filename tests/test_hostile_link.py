@@ -39,9 +39,10 @@ def one_line(err: str) -> None:
     assert err.count("\n") == 1 and "Traceback" not in err, err
 
 
-def hostile_run(suite, cases, mode: str, capacity: int | None = None, dst: int | None = None, ids=None):
-    """The scenarios (all, or ``ids``) against the hostile node on virtual time."""
-    node = HostileNode(ReferenceNode(suite.defs, suite.behaviour, edition=EDITION, address=NODE), mode)
+def hostile_run(suite, cases, mode: str, capacity: int | None = None, dst: int | None = None, ids=None, broken=None):
+    """The scenarios (all, or ``ids``) against the hostile node (made of a broken one, if ``broken``) on virtual
+    time."""
+    node = HostileNode(ReferenceNode(suite.defs, suite.behaviour, edition=EDITION, address=NODE, broken=broken), mode)
     link = VirtualLink(node, NODE, OWN, capacity=capacity)
     peer = ImcPeer(suite.defs, system=DEFAULT_SYSTEM, node=dst, service=f"imc+udp://{OWN[0]}:{OWN[1]}/", host=NODE[0],
                    epoch=link.epoch)
@@ -100,6 +101,18 @@ def test_item_16_the_session_own_frames_never_count_as_the_node(suite, cases):
     assert any("no valid frame ever came from hostile node" in n for n in result.notes)
     assert {c.verdict for c in result.cases} == {Verdict.INCONCLUSIVE}
     assert result.exit_code() == 2
+
+
+@pytest.mark.parametrize("broken", ["two-terminals", "status-after-terminal", "wrong-system"])
+def test_item_15_while_another_system_uses_the_session_id_no_failure_is_judged(suite, cases, broken):
+    """Its replies and the session's cannot be told apart (an AcousticOperation's only correlation is the system's
+    name): from the moment the impostor shows, a scenario's failures are INCONCLUSIVE, those of scenarios that
+    ended before it stay."""
+    result, _, _ = hostile_run(suite, cases, "impostor-announce", broken=broken)
+    assert any(c.verdict is Verdict.INCONCLUSIVE and "session's id" in c.detail for c in result.cases)
+    for case in result.cases:
+        if case.verdict is Verdict.FAIL:
+            assert not any(e["event"] == "impaired" for e in case.timeline), case.id
 
 
 def test_item_15_a_reply_off_by_a_little_is_the_node_s_mistake_not_an_impostor(suite, cases):

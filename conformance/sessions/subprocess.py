@@ -52,6 +52,7 @@ from itertools import count
 from typing import Iterable, Iterator
 
 from ..core.results import Incident
+from ..inputs import nesting_problem
 from ..core.session import AdapterStartError, Answer, Job
 
 STDERR_KEEP = 64 * 1024
@@ -71,8 +72,16 @@ def _reject_constant(name: str):
 
 
 def _parse(raw: bytes):
-    """The JSON value of a line (strict: NaN and Infinity are not JSON); raises ValueError."""
-    return json.loads(raw, parse_constant=_reject_constant)
+    """The JSON value of a line (strict: NaN and Infinity are not JSON; nested no deeper than the code that reads
+    it follows); raises ValueError."""
+    try:
+        value = json.loads(raw, parse_constant=_reject_constant)
+    except RecursionError:
+        raise ValueError("JSON nested too deeply") from None
+    problem = nesting_problem(value)
+    if problem:
+        raise ValueError(problem)
+    return value
 
 
 class _StderrTail:

@@ -166,7 +166,7 @@ class PhaseMachine:
             return []
         return self._resume(t, epoch, None)
 
-    def impaired(self, t: float, why: str) -> None:
+    def impaired(self, t: float, why: str, lasting: bool = False) -> None:
         """The link could not show everything (``why``): a probe unanswered in the round under way is not judged."""
         self.impairments.append(why)
         self._log("impaired", why)

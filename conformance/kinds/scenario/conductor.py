@@ -101,7 +101,7 @@ class Conductor:
             machine = program.machine(addressing, self.unique, [programs[j] for j in members])
             self.running[job], self.members[job] = machine, members
             for why in self.lasting:
-                machine.impaired(t, why)
+                machine.impaired(t, why, lasting=True)
             out += self._sent(job, machine, machine.start(t, self.epoch(t)))
             if getattr(program, "exclusive", False):
                 break
@@ -150,7 +150,7 @@ class Conductor:
         if lasting and why not in self.lasting:
             self.lasting.append(why)
         for machine in self.running.values():
-            machine.impaired(t, why)
+            machine.impaired(t, why, lasting)
 
     def undeliverable(self, t: float, job, why: str) -> list[Outgoing]:
         """What a job's machine sent could not be sent (``why``): it stops, unable to run (INCONCLUSIVE)."""

@@ -9,9 +9,10 @@ nothing more for a quiet period; ``silence``: no such message for a while; ``ali
 sends something; ``wait``.
 
 A step that fails for want of a frame (no reply, no terminal state) while the session could not see everything
-(the link reported an impairment: the kernel dropped datagrams, another system uses the session's id) or while
-a frame of the awaited message could not be judged is INCONCLUSIVE, never FAIL: the missing frame may have been
-among those the suite did not see.
+(the link reported an impairment: the kernel dropped datagrams) or while a frame of the awaited message could
+not be judged is INCONCLUSIVE, never FAIL: the missing frame may have been among those the suite did not see.
+While another system uses the session's id (a lasting impairment) every failure is INCONCLUSIVE: the other's
+replies and the session's cannot be told apart, nor can the replies it took away.
 """
 
 from __future__ import annotations
@@ -116,6 +117,7 @@ class Machine:
         self.acks: dict[str, str | None] = {}  # send or setup step -> why the target refused its call, or None
         self.released = False  # its resources are free for another scenario (a released sequence ended)
         self.impairments: list[str] = []  # what the link could not show while the scenario ran
+        self.suspect: list[str] = []  # lasting impairments: every failure from now on is INCONCLUSIVE
         self.t0 = 0.0
         self.index = -1
         self.step: _Step | None = None
@@ -176,13 +178,19 @@ class Machine:
         getattr(self, "_on_" + step.kind)(t, step, parsed)
         return self._advance(t, epoch) if self._finished(t, step) else []
 
-    def impaired(self, t: float, why: str) -> None:
+    def impaired(self, t: float, why: str, lasting: bool = False) -> None:
         """The link could not show everything while the scenario ran (``why``: e.g. the kernel dropped datagrams):
-        a step failing for want of a frame is then INCONCLUSIVE."""
+        a step failing for want of a frame is then INCONCLUSIVE; ``lasting`` (another system uses the session's
+        id): any failure of the scenario is."""
         if self.done:
             return
         if why not in self.impairments:
             self.impairments.append(why)
+        if lasting and why not in self.suspect:
+            self.suspect.append(why)
+            for f in self.findings:
+                if not f.passed and not f.inconclusive:
+                    f.inconclusive, f.detail = True, f"{f.detail}; not judged: {why}"
         self.timeline.append({"t": self._rel(t), "event": "impaired", "note": why})
 
     def wake(self, t: float, epoch: float) -> list[Composed]:
@@ -508,6 +516,7 @@ class Machine:
         """Record a check of the step; ``blind``: why a failure for want of a frame cannot be judged."""
         spec = step.spec
         check = f"step:{spec['id']}" + (f":{what}" if what else "")
+        blind = "; ".join(self.suspect) or blind
         inconclusive = not passed and blind is not None
         self.findings.append(Finding(check, passed, level or spec.get("level", "MUST"),
                                      clause or spec.get("clause") or self.program.scenario["clause"],

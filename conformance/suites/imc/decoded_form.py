@@ -11,6 +11,7 @@ an answer may hold any value of the right kind: a wrong value is the implementat
 
 from __future__ import annotations
 
+from ...limits import NESTING_LIMIT
 from .definitions import Definitions, FieldDef, MessageDef
 from ...kinds.vector.floats import float_to_bits
 from .values import raw_bytes, text_bytes
@@ -44,6 +45,7 @@ def message_problem(defs: Definitions, message, *, whole_header: bool, in_range:
 class _Walk:
     def __init__(self, defs: Definitions, in_range: bool):
         self.defs, self.in_range = defs, in_range
+        self.depth = 0
 
     def top(self, message, whole_header: bool) -> None:
         if not isinstance(message, dict):
@@ -107,7 +109,11 @@ class _Walk:
             return
         if not isinstance(value, dict) or set(value) != {"abbrev", "fields"}:
             raise _Malformed(path, f"expected null or an inline message {{abbrev, fields}}, got {_show(value)}")
+        if self.depth >= NESTING_LIMIT:
+            raise _Malformed(path, f"inline messages nested deeper than {NESTING_LIMIT} levels")
+        self.depth += 1
         self.fields(self.definition(value["abbrev"], f"{path}.abbrev"), value["fields"], f"{path}.fields", complete=True)
+        self.depth -= 1
 
 
 def _show(value) -> str:

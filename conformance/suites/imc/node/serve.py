@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import select
+import signal
 import socket
 import sys
 import time
@@ -101,6 +102,7 @@ def command_serve(args, suite) -> int:
                          epoch0=offset)
     print(f"reference IMC node {name} (0x{system:04X}, {edition}) on {url(*sock.getsockname()[:2])}"
           + (f", broken: {args.broken}" if args.broken else "") + "; Ctrl-C stops it", file=sys.stderr, flush=True)
+    signal.signal(signal.SIGTERM, _interrupt)  # kill stops it as Ctrl-C does, with its summary
     try:
         serve_forever(sock, node)
     except KeyboardInterrupt:
@@ -111,6 +113,10 @@ def command_serve(args, suite) -> int:
     finally:
         sock.close()
     return 0
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
 
 
 def serve_forever(sock, node: ReferenceNode) -> None:
