@@ -13,11 +13,9 @@ import json
 from functools import cache
 from pathlib import Path
 
-from jsonschema import Draft202012Validator
-from jsonschema.exceptions import best_match
-
 from . import inputs
 from .cache import remembered
+from .errors import CorpusError
 from .core.cases import Case
 from .core.results import SCHEMAS, RunResult, format_version
 from .core.suite import Suite
@@ -26,12 +24,11 @@ from .paths import VECTORS
 from .suites import load_suite
 
 
-class CorpusError(ValueError):
-    """A case file the runner cannot use; the message names the file and the JSON path."""
-
-
 @cache
-def validator(schema: Path) -> tuple[bytes, Draft202012Validator]:
+def validator(schema: Path):
+    """The schema's bytes and its validator (jsonschema is imported here: only a run that validates pays for it)."""
+    from jsonschema import Draft202012Validator
+
     raw = schema.read_bytes()
     return raw, Draft202012Validator(json.loads(raw))
 
@@ -43,6 +40,8 @@ def schema_error(schema: Path, doc, where: str, memo: bytes | None = None) -> st
     known, record = remembered(schema.name, raw, memo) if memo is not None else (False, lambda: None)
     if known:
         return None
+    from jsonschema.exceptions import best_match
+
     try:
         error = best_match(check.iter_errors(doc))
     except RecursionError:

@@ -4,7 +4,6 @@ and opening a ``--target`` with an optional ``--restart-cmd``."""
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import secrets
@@ -16,23 +15,12 @@ from pathlib import Path
 
 from .kinds.scenario import options as vocabulary
 from .kinds.scenario.conductor import UNIQUE_SPAN
-from .render.common import printable
+from .escaping import printable
 
 RESTART_TIMEOUT = 120.0  # seconds a --restart-cmd may take
 TAIL_WAIT = 1.0  # seconds to read what a failed restart command wrote, when a node it started holds its stderr
 LIVE_FLAGS = ("target", "param", "allow_effects", "claims", "profile", "robustness", "restart_cmd", "replay_effects",
               "dry_run")
-
-
-def system_id(text: str) -> int:
-    """An IMC-style numeric id for --src/--dst (argparse type)."""
-    try:
-        value = int(text, 0)
-    except ValueError:
-        value = -1
-    if not 0 <= value < 0xFFFF:
-        raise argparse.ArgumentTypeError(f"{text!r}: an id is 0 to 0xFFFE (decimal or 0x hex)")
-    return value
 
 
 def options(args, suite, everything) -> dict:

@@ -79,8 +79,9 @@ def pytest_collection_modifyitems(session, config, items):
     spec = config.getoption("conformance_adapter")
     if not spec:
         return
-    from .cli import UsageError, load_library_adapter
-    from .files import CorpusError, open_corpus
+    from .commands.adapters import load_library_adapter
+    from .errors import CorpusError, UsageError
+    from .files import open_corpus
     from .suites import names
 
     try:

@@ -390,7 +390,7 @@ def tricky_result(broken_result):
 
 
 def terminal_text(result) -> str:
-    from imc_conformance.cli import terminal
+    from imc_conformance.commands.output import terminal
     from imc_conformance.render.terminal import print_result
 
     console = terminal()

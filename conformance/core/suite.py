@@ -109,9 +109,6 @@ class Suite(ABC):
     def generate(self, check: bool) -> int:
         """Rebuild the suite's generated files (or, with ``check``, only report drift: 1 if any); the exit code."""
 
-    def commands(self, subparsers) -> None:
-        """Add the suite's own subcommands to the command line (none by default)."""
-
     behaviour: dict | None = None  # what the suite's live case kinds share (exchanges, parameters, effects, services)
 
     def open_target(self, target: str, **settings):

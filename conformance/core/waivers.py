@@ -14,7 +14,9 @@ from dataclasses import dataclass
 
 
 class WaiverError(ValueError):
-    pass
+    """A waivers file the run cannot use (unknown keys, unknown or repeated case ids)."""
+
+
 
 
 @dataclass(frozen=True)

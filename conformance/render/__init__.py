@@ -1,12 +1,29 @@
-"""Report renderers: each takes a ``RunResult`` and returns the report as a string (the CLI writes files)."""
+"""Report renderers: each takes a ``RunResult`` and returns the report as a string (the CLI writes files).
+
+``RENDERERS`` maps a format to its renderer, importing the renderer's module when it is first asked for: a run that
+writes no HTML report never imports jinja2, and importing this package (or ``render.common``'s escaping) costs
+nothing."""
 
 from __future__ import annotations
 
-from .html import render_html
-from .json_result import render_json
-from .junit import render_junit
-from .markdown import render_markdown
+import importlib
+from collections.abc import Mapping
 
-RENDERERS = {"json": render_json, "junit": render_junit, "markdown": render_markdown, "html": render_html}
+_MODULES = {"json": "json_result", "junit": "junit", "markdown": "markdown", "html": "html"}
 
-__all__ = ["RENDERERS", "render_html", "render_json", "render_junit", "render_markdown"]
+
+class _Renderers(Mapping):
+    def __getitem__(self, fmt: str):
+        module = importlib.import_module(f"{__name__}.{_MODULES[fmt]}")
+        return getattr(module, f"render_{fmt}")
+
+    def __iter__(self):
+        return iter(_MODULES)
+
+    def __len__(self) -> int:
+        return len(_MODULES)
+
+
+RENDERERS = _Renderers()
+
+__all__ = ["RENDERERS"]

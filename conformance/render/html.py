@@ -15,7 +15,8 @@ from jinja2 import Environment, FileSystemLoader, StrictUndefined
 from ..core.results import ByteDiff
 from ..core.verdicts import Verdict
 from ..core.results import FORMAT, CaseResult, RunResult
-from .common import TIMELINE_LIMIT, attention, clean, incident_lines, overall, verdict_columns
+from ..escaping import clean
+from .common import TIMELINE_LIMIT, attention, incident_lines, overall, verdict_columns
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 MAX_DETAILED = 200  # failing cases shown in full

@@ -12,7 +12,8 @@ from collections import Counter
 
 from ..core.verdicts import Verdict, failing
 from ..core.results import CaseResult, RunResult
-from .common import clean, incident_lines, timeline_lines
+from ..escaping import clean
+from .common import incident_lines, timeline_lines
 
 ERRORS = {Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR}
 MESSAGE_LIMIT = 500  # characters of detail in a failure's message attribute

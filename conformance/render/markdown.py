@@ -6,7 +6,8 @@ import re
 
 from ..core.verdicts import Verdict
 from ..core.results import RunResult
-from .common import TIMELINE_LIMIT, attention, clean, incident_lines, overall, verdict_columns
+from ..escaping import clean
+from .common import TIMELINE_LIMIT, attention, incident_lines, overall, verdict_columns
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",

@@ -13,7 +13,8 @@ from rich.table import Table
 
 from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
-from .common import incident_lines, printable, timeline_lines
+from ..escaping import printable
+from .common import incident_lines, timeline_lines
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
 SHOWN_FAILURES = 20

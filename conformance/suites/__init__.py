@@ -11,8 +11,6 @@ import pkgutil
 from functools import cache
 from pathlib import Path
 
-from ..core.suite import Suite
-
 
 def names() -> list[str]:
     """The installed suites' names, the default (imc) first."""
@@ -21,8 +19,9 @@ def names() -> list[str]:
 
 
 @cache
-def load_suite(name: str, folder: Path | None = None) -> Suite:
-    """The suite ``name`` over its packaged data, or over ``folder``; raises LookupError for an unknown name."""
+def load_suite(name: str, folder: Path | None = None):
+    """The suite ``name`` (a ``core.suite.Suite``) over its packaged data, or over ``folder``; raises LookupError for
+    an unknown name."""
     if name not in names():
         raise LookupError(f"unknown suite {name!r} (suites: {', '.join(names())})")
     return importlib.import_module(f"{__name__}.{name}").load(folder)

@@ -19,7 +19,8 @@ def read_data_file(path: Path, schema: str | None, packaged: Path):
     ``schema`` (a file of vectors/schema); CorpusError naming the file and the JSON path of a problem."""
     if path.is_relative_to(packaged):
         return json.loads(path.read_text(encoding="utf-8"))
-    from ..files import CorpusError, schema_error
+    from ..errors import CorpusError
+    from ..files import schema_error
     from ..inputs import read_json
     from ..paths import VECTORS
 

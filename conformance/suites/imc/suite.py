@@ -119,10 +119,6 @@ class ImcSuite(DataSuite):
         from .corpus.build import main
         return main(["--check"] if check else [])
 
-    def commands(self, subparsers) -> None:
-        from .node.serve import add_command
-        add_command(subparsers, lambda: self)
-
     def capture_rules(self):
         from .capture import ImcCaptureRules
         return ImcCaptureRules(self.defs, self.wire, self.rules, self.behaviour)

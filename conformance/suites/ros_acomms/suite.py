@@ -13,7 +13,6 @@ from ...paths import VECTORS
 from . import codec, forms
 from .definitions import DefinitionError, RosDefinitions, load_definitions, parse_definitions
 from .msgtext import expected_types, parse_full_text, text_differences
-from .package_files import write_package
 from ..data_suite import DataSuite, read_data_file
 from .paths import ROS
 from .wire import RosWire
@@ -137,23 +136,6 @@ class RosSuite(DataSuite):
         from .corpus.build import main
         return main(["--check"] if check else [])
 
-    def commands(self, subparsers) -> None:
-        files = subparsers.add_parser("ros-msg-files", help="write ros_acomms_msgs .msg and .srv files of an edition")
-        files.add_argument("folder", type=Path, help="where to write msg/ and srv/ (created if need be)")
-        files.add_argument("--edition", default=self.editions[0], choices=self.editions)
-        files.add_argument("--replace", action="store_true", help="replace files that are there already")
-        files.set_defaults(func=lambda args: self._write_package(args))
-
-    def _write_package(self, args) -> int:
-        from ...usage import UsageError
-        try:
-            written, left_out = write_package(self.defs.edition(args.edition), args.folder, args.replace)
-        except ValueError as exc:
-            raise UsageError(str(exc)) from None
-        print(f"wrote {len(written)} files under {args.folder}" +
-              (f"; left out of edition {args.edition}: {', '.join(left_out)}" if left_out else ""))
-        return 0
-
 
 def load(folder: Path | None = None) -> RosSuite:
     """The ros_acomms suite over its packaged data, or over a suite folder given instead."""
@@ -165,5 +147,5 @@ def load(folder: Path | None = None) -> RosSuite:
     try:
         return RosSuite(folder, parse_definitions(doc))
     except DefinitionError as exc:
-        from ...files import CorpusError
+        from ...errors import CorpusError
         raise CorpusError(f"{own}: {exc}") from None

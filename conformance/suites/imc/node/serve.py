@@ -8,12 +8,10 @@ import socket
 import sys
 import time
 
-from ....sessions.udp import MAX_DATAGRAM, bound_socket, group_address, resolve, url
 from .breaks import BREAKS
-from .node import ReferenceNode
 
 
-def add_command(sub, suite_loader) -> None:
+def add_command(sub) -> None:
     serve = sub.add_parser("serve", help="run the reference IMC node (or a broken one) on loopback UDP",
                            description="A simulated IMC node implementing the seeds' behaviour, with a simulated "
                                        "acoustic channel and fake Iridium/SMS gateways. It answers only systems that "
@@ -31,7 +29,7 @@ def add_command(sub, suite_loader) -> None:
     serve.add_argument("--seed", type=int, default=0, help="seed of the loss and duplication (default 0)")
     serve.add_argument("--break", dest="broken", choices=sorted(BREAKS), metavar="NAME",
                        help="break one rule: " + "; ".join(f"{k}: {v}" for k, v in BREAKS.items()))
-    serve.set_defaults(func=lambda args: command_serve(args, suite_loader()))
+    serve.set_defaults(func=command_serve)
 
 
 def port_number(text: str) -> int:
@@ -78,9 +76,13 @@ def parse_peers(items: list[str]) -> dict[str, float] | None:
     return peers
 
 
-def command_serve(args, suite) -> int:
-    from ....usage import UsageError
+def command_serve(args) -> int:
+    from ....errors import UsageError
+    from ....sessions.udp import bound_socket, group_address, resolve, url
+    from .. import load
+    from .node import ReferenceNode
 
+    suite = load()
     edition = args.edition or suite.editions[0]
     if edition not in suite.editions:
         raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
@@ -119,7 +121,9 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
-def serve_forever(sock, node: ReferenceNode) -> None:
+def serve_forever(sock, node) -> None:
+    from ....sessions.udp import MAX_DATAGRAM, group_address
+
     while True:
         deadline = node.deadline
         wait = 1.0 if deadline is None else max(0.0, min(1.0, deadline - time.monotonic()))

@@ -13,31 +13,31 @@ import sys
 import time
 from pathlib import Path
 
-from .capture.datagrams import ETHERNET, RAW, Datagram
-from .capture.judge import CaptureJudge, Selection
-from .capture.records import Record
+from ..errors import UsageError
+from .options import add_judging, add_reports, address, positive_seconds
 
 REFRESH = 1.0  # seconds between redraws of the table
 SOL_PACKET, PACKET_STATISTICS = 263, 6  # linux/socket.h, linux/if_packet.h
 
 
-def add_command(sub, add_suite, add_reports, positive_seconds, address, add_judging) -> None:
+def add(sub) -> None:
     watch = sub.add_parser("watch", help="judge live traffic as it passes (sends nothing): udp://ADDR:PORT or --iface")
     watch.add_argument("source", nargs="?", metavar="udp://ADDR:PORT",
                        help="judge what is sent to this socket (unicast; the socket is bound, no group is joined)")
     watch.add_argument("--iface", metavar="NAME", help="sniff this interface instead (needs CAP_NET_RAW, e.g. root)")
-    add_judging(watch, add_suite, positive_seconds)
+    add_judging(watch)
     watch.add_argument("--host", type=address, metavar="ADDR|ID", help="only datagrams from or to this address or id")
     watch.add_argument("--duration", type=positive_seconds, metavar="SECONDS", help="stop after this long (default: Ctrl-C)")
     add_reports(watch)
-    watch.set_defaults(func=command_watch)
+    watch.set_defaults(func=command)
 
 
-def command_watch(args) -> int:
-    from .cli import report_targets, terminal, write_reports
-    from .usage import UsageError
-    from .capture_command import capture_rules
-    from .render.terminal import print_result
+def command(args) -> int:
+    from ..capture.judge import CaptureJudge, Selection
+    from ..capture.records import Record
+    from ..render.terminal import print_result
+    from .output import report_targets, terminal, write_reports
+    from .pcap import capture_rules
 
     targets = report_targets(args)
     if (args.source is None) == (args.iface is None):
@@ -88,7 +88,7 @@ def command_watch(args) -> int:
     return 2 if write_reports(result, targets, console) else result.exit_code()
 
 
-def report_losses(listen, judge: CaptureJudge) -> None:
+def report_losses(listen, judge) -> None:
     """Tell the judge of datagrams the listener lost since it last said (and when)."""
     lost = listen.drops() - judge.lost
     if lost > 0:
@@ -96,7 +96,7 @@ def report_losses(listen, judge: CaptureJudge) -> None:
     listen.since = time.time()
 
 
-def _table(console, judge: CaptureJudge):
+def _table(console, judge):
     """A live per-message table (rich) on a terminal; elsewhere, nothing until the end."""
     from contextlib import contextmanager
 
@@ -137,9 +137,10 @@ class SocketListener:
         self.sock, self.address, self.number = sock, sock.getsockname(), 0
         self.dropped, self.since = 0, time.time()
 
-    def take(self, wait: float) -> list[Datagram]:
+    def take(self, wait: float) -> list:
         """What arrived within ``wait`` seconds (at most a thousand datagrams at a time)."""
-        from .sessions.udp import read
+        from ..capture.datagrams import Datagram
+        from ..sessions.udp import read
 
         out = []
         ready, _, _ = select.select([self.sock], [], [], max(0.0, wait))
@@ -154,13 +155,13 @@ class SocketListener:
         return out
 
     def drops(self) -> int:
-        from .sessions.udp import kernel_drops
+        from ..sessions.udp import kernel_drops
 
         if not self.sock._closed:
             self.dropped = max(self.dropped, kernel_drops([self.sock]).get(self.sock.fileno(), 0))
         return self.dropped
 
-    def stop(self) -> list[Datagram]:
+    def stop(self) -> list:
         """Stop listening; what was already queued on the socket."""
         out, more = [], self.take(0)
         while more:
@@ -171,8 +172,7 @@ class SocketListener:
 
 
 def open_socket(url: str) -> SocketListener:
-    from .usage import UsageError
-    from .sessions.udp import bound_socket, group_address, parse_endpoint, resolve
+    from ..sessions.udp import bound_socket, group_address, parse_endpoint, resolve
 
     try:
         host, port = parse_endpoint(url, "watch")
@@ -189,9 +189,6 @@ def open_socket(url: str) -> SocketListener:
         raise UsageError(str(exc)) from None
     sock.setblocking(False)
     return SocketListener(sock)
-
-
-ARPHRD = {1: ETHERNET, 772: ETHERNET, 65534: RAW}  # Linux interface types: Ethernet, loopback, none (tun)
 
 
 class Sniffer:
@@ -226,8 +223,10 @@ class Sniffer:
         if not self.sniffer.thread.is_alive():
             raise OSError("the sniffer stopped at once")
 
-    def take(self, wait: float) -> list[Record]:
+    def take(self, wait: float) -> list:
         from queue import Empty
+
+        from ..capture.records import Record
 
         out = []
         until = time.monotonic() + wait
@@ -255,7 +254,7 @@ class Sniffer:
         self.dropped += dropped
         return self.dropped
 
-    def stop(self) -> list[Record]:
+    def stop(self) -> list:
         """Stop sniffing; what was already captured."""
         self.drops()
         try:
@@ -269,12 +268,14 @@ class Sniffer:
 
 
 def open_sniffer(iface: str) -> Sniffer:
-    from .usage import UsageError
 
+    from ..capture.datagrams import ETHERNET, RAW
+
+    arphrd = {1: ETHERNET, 772: ETHERNET, 65534: RAW}  # Linux interface types: Ethernet, loopback, none (tun)
     kind = Path(f"/sys/class/net/{iface}/type")
     if "/" in iface or not kind.exists():
         raise UsageError(f"--iface {iface}: no such network interface")
-    linktype = ARPHRD.get(int(kind.read_text().strip() or -1))
+    linktype = arphrd.get(int(kind.read_text().strip() or -1))
     if linktype is None:
         raise UsageError(f"--iface {iface}: its link layer (Linux type {kind.read_text().strip()}) is not Ethernet, "
                          "loopback or raw IP")

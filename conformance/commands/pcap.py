@@ -2,102 +2,40 @@
 
 from __future__ import annotations
 
-import argparse
 import datetime as dt
-import ipaddress
 import mmap
 import sys
 import time
 from pathlib import Path
 
-from .arguments import time_scale
-from .capture.judge import CaptureJudge, Selection
-from .capture.recording import OWN, RECEIVED, read_about, run_ended
-from .capture.records import CaptureError, records
-from .limits import PIPE_LIMIT
+from ..errors import UsageError
+from ..limits import PIPE_LIMIT
+from .options import add_adapter, add_judging, add_reports, address, count, offset_seconds
 
 
-def address(text: str) -> str | int:
-    """An IP address, or a system id (decimal or 0x hex), for --src/--dst/--host (argparse type)."""
-    try:
-        return ipaddress.ip_address(text).compressed
-    except ValueError:
-        pass
-    try:
-        value = int(text, 0)
-    except ValueError:
-        value = -1
-    if not 0 <= value <= 0xFFFF:
-        raise argparse.ArgumentTypeError(f"{text!r}: give an IP address or a system id (0 to 0xFFFF, decimal or 0x hex)")
-    return value
-
-
-def port(text: str) -> int:
-    if not text.isdigit() or not 0 < int(text) < 65536:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a UDP port")
-    return int(text)
-
-
-def seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r}: give seconds from the capture's first record (0 or more)")
-    return value
-
-
-def count(text: str) -> int:
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number")
-    return int(text)
-
-
-def add_judging(parser, add_suite, positive_seconds) -> None:
-    """The options pcap and watch share: what to judge against, which frames, how to report."""
-    add_suite(parser)
-    parser.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
-    parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
-                        help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")
-    parser.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
-    parser.add_argument("--list-frames", type=count, default=20, metavar="N",
-                        help="failing frames listed per message and rule (default 20)")
-    parser.add_argument("--time-scale", type=time_scale, default=1.0, metavar="F",
-                        help="multiply every exchange's time bound by F (slow links)")
-    parser.add_argument("--strict", action="store_true", help="NON_STRICT (a SHOULD not met) and INCONCLUSIVE fail too")
-
-
-def add_command(sub, add_suite, add_reports, positive_seconds) -> None:
+def add(sub) -> None:
     pcap = sub.add_parser("pcap", help="judge captured traffic (pcap or pcapng): every frame, every exchange")
     pcap.add_argument("files", nargs="+", metavar="FILE", help="pcap or pcapng captures (Ethernet, raw IP, Linux "
                                                                 "cooked SLL/SLL2, BSD loopback; IPv4 and IPv6)")
-    add_judging(pcap, add_suite, positive_seconds)
+    add_judging(pcap)
     pcap.add_argument("--src", type=address, metavar="ADDR|ID", help="only datagrams from this IP address or system id")
     pcap.add_argument("--dst", type=address, metavar="ADDR|ID", help="only datagrams to this IP address or system id")
     pcap.add_argument("--host", type=address, metavar="ADDR|ID",
                       help="only datagrams from or to this IP address or system id (keeps whole exchanges)")
-    pcap.add_argument("--start", type=seconds, metavar="SECONDS", help="only from this many seconds into the capture")
-    pcap.add_argument("--end", type=seconds, metavar="SECONDS", help="only until this many seconds into the capture")
+    pcap.add_argument("--start", type=offset_seconds, metavar="SECONDS", help="only from this many seconds into the capture")
+    pcap.add_argument("--end", type=offset_seconds, metavar="SECONDS", help="only until this many seconds into the capture")
     replay_group = pcap.add_argument_group("the capture as a corpus: its frames through an implementation's decode")
-    replay_group.add_argument("--adapter", help="a built-in or library adapter (as for run) to decode every distinct "
-                                                "captured frame; where it disagrees with the reference is reported")
-    replay_group.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter (as for run)")
-    replay_group.add_argument("--adapter-arg", action="append", default=[], metavar="NAME=VALUE",
-                              help="an argument for a library adapter's class or factory (repeatable)")
-    replay_group.add_argument("--timeout", type=positive_seconds, default=5.0, help="seconds per request (subprocess)")
-    replay_group.add_argument("--memory-limit", type=count, default=2048, metavar="MB",
-                              help="data memory a subprocess adapter may use (default 2048; 0: no limit)")
+    add_adapter(replay_group, what="decode every distinct captured frame with this implementation (where it disagrees "
+                                   "with the reference is reported)")
     replay_group.add_argument("--adapter-frames", type=count, default=100_000, metavar="N",
                               help="distinct frames decoded at most (default 100,000)")
     add_reports(pcap)
-    pcap.set_defaults(func=command_pcap)
+    pcap.set_defaults(func=command)
 
 
 def capture_rules(args):
     """The suite, its capture rules and the edition the options name; usage errors for what they cannot be."""
-    from .suites import load_suite
-    from .usage import UsageError
+    from ..suites import load_suite
 
     suite = load_suite(args.suite)
     try:
@@ -113,9 +51,9 @@ def capture_rules(args):
     return suite, rules, edition
 
 
-def command_pcap(args) -> int:
-    from .cli import report_targets
-    from .usage import UsageError
+def command(args) -> int:
+    from ..capture.judge import CaptureJudge, Selection
+    from .output import report_targets
 
     targets = report_targets(args)
     suite, rules, edition = capture_rules(args)
@@ -126,6 +64,7 @@ def command_pcap(args) -> int:
     judge = CaptureJudge(suite.name, rules, edition, selection)
     adapter = None  # (name, session)
     if args.adapter is not None or args.adapter_cmd is not None:  # started first: a mistaken adapter says so at once
+        from .adapters import started_session
         adapter = started_session(args, suite)
         judge.corpus_limit = args.adapter_frames
     try:
@@ -137,9 +76,8 @@ def command_pcap(args) -> int:
 
 def judged(args, suite, rules, selection, judge, adapter, targets) -> int:
     """Judge the captures, replay a recorded run, decode the frames through an adapter; report; the exit code."""
-    from .cli import terminal, write_reports
-    from .render.terminal import print_result
-    from .usage import UsageError
+    from ..render.terminal import print_result
+    from .output import terminal, write_reports
 
     started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = time.perf_counter()
@@ -173,10 +111,12 @@ def judged(args, suite, rules, selection, judge, adapter, targets) -> int:
     return 2 if problems or damage else result.exit_code()
 
 
-def judge_file(judge: CaptureJudge, path: Path, named: bool) -> list[str]:
-    """Feed every record of the capture at ``path``; what the reports should say of it (its damage: the records
-    before it are judged; a recorded run's description that cannot be read)."""
-    from .usage import UsageError
+def judge_file(judge, path: Path, named: bool) -> list[str]:
+    """Feed every record of the capture at ``path`` to the ``CaptureJudge``; what the reports should say of it (its
+    damage: the records before it are judged; a recorded run's description that cannot be read)."""
+    from ..capture.recording import run_ended
+    from ..capture.records import CaptureError, records
+
 
     buf = read_capture(path)
     source, sections, said = f"{path.name} " if named else "", [], []
@@ -196,9 +136,9 @@ def judge_file(judge: CaptureJudge, path: Path, named: bool) -> list[str]:
     return said
 
 
-def recorded_run(judge: CaptureJudge, path: Path, sections: list[str], named: bool) -> list[str]:
+def recorded_run(judge, path: Path, sections: list[str], named: bool) -> list[str]:
     """Take the run a capture's section describes (``run --pcap``), to replay it; what to say if it cannot be."""
-    from .usage import UsageError
+    from ..capture.recording import read_about
 
     try:
         about = read_about(sections)
@@ -212,7 +152,6 @@ def recorded_run(judge: CaptureJudge, path: Path, sections: list[str], named: bo
 
 def read_capture(path: Path):
     """The bytes of a capture: a regular file mapped, a pipe or device read (at most PIPE_LIMIT bytes)."""
-    from .usage import UsageError
 
     try:
         if str(path) == "-":
@@ -235,8 +174,7 @@ def read_capture(path: Path):
 
 def _read_stream(handle, path: Path) -> bytes:
     """A capture from a stream: its first bytes must be a capture's (so /dev/zero is refused at once)."""
-    from .capture.records import PCAP_MAGICS, PCAPNG_SHB
-    from .usage import UsageError
+    from ..capture.records import PCAP_MAGICS, PCAPNG_SHB
 
     head = handle.read(4)
     if head and head not in PCAP_MAGICS and head != PCAPNG_SHB:
@@ -248,10 +186,11 @@ def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, comp
     """The scenario verdicts of a recorded run (those of ``messages``, when given), its engine replayed over the
     recorded datagrams on virtual time (robustness excluded: its restarts and floods cannot be replayed);
     ValueError if the recording cannot be."""
-    from .core.runner import run_cases
-    from .files import open_corpus
-    from .live import check_params
-    from .sessions.replay import Recorded, ReplayLink
+    from ..core.runner import run_cases
+    from ..files import open_corpus
+    from ..live import check_params
+    from ..capture.recording import OWN, RECEIVED
+    from ..sessions.replay import Recorded, ReplayLink
 
     try:
         suite, everything = open_corpus(about["suite"], None)
@@ -284,29 +223,12 @@ def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, comp
     return result
 
 
-def started_session(args, suite):
-    """(name, session) of the adapter that decodes the captured frames, started and greeted; usage errors if not."""
-    from .cli import adapter_choice, open_session
-    from .core.session import AdapterStartError
-    from .usage import UsageError
-
-    name, argv = adapter_choice(args, suite)
-    session = open_session(name, argv, args, suite)
-    try:
-        session.hello()
-    except AdapterStartError as exc:
-        session.close()
-        raise UsageError(str(exc)) from exc
-    return name, session
-
-
-def decoded_by(judge: CaptureJudge, suite, adapter: tuple, args):
+def decoded_by(judge, suite, adapter: tuple, args):
     """The capture as a corpus: each distinct frame decoded by the implementation, judged as a vector case whose
     verdict is the reference codec's."""
-    from .usage import UsageError
-    from .core.cases import Case
-    from .core.runner import run_cases
-    from .core.session import AdapterStartError
+    from ..core.cases import Case
+    from ..core.runner import run_cases
+    from ..core.session import AdapterStartError
 
     cases = []
     for data, (group, number) in judge.corpus.items():
@@ -328,8 +250,8 @@ def decoded_by(judge: CaptureJudge, suite, adapter: tuple, args):
 def collapsed(cases: list, data: dict, listed: int) -> list:
     """One case per message and expectation (``…/capture/decode/valid`` or ``…/decode/<rule>``) for a frame's
     decode cases: how many frames had each verdict, and the first failing ones."""
-    from .core.results import CaseResult, CheckResult
-    from .core.verdicts import Verdict, worst
+    from ..core.results import CaseResult, CheckResult
+    from ..core.verdicts import Verdict, worst
 
     groups: dict[str, list] = {}
     for c in cases:
@@ -356,7 +278,7 @@ def collapsed(cases: list, data: dict, listed: int) -> list:
 
 def merge(result, replayed, order: list[str], strict: bool) -> None:
     """Add a replay's scenario cases to a capture's result, each under its message."""
-    from .core.results import MessageResult, message_verdict
+    from ..core.results import MessageResult, message_verdict
 
     groups = {m.name: m.cases for m in result.messages}
     for m in replayed.messages:

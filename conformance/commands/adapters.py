@@ -1,0 +1,105 @@
+"""Reaching an implementation from the command line: a built-in or library adapter loaded in-process, or a
+subprocess adapter started (``--adapter``, ``--adapter-cmd``, ``--adapter-arg``)."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import inspect
+import shlex
+from pathlib import Path
+
+from ..errors import UsageError
+
+
+def load_library_adapter(spec: str, suite, arguments: dict[str, str] | None = None):
+    """An adapter object from a built-in name, ``module:attribute`` or ``path/to/file.py:attribute`` (an
+    adapter object, a class or a factory; ``arguments`` are passed to the class or factory)."""
+    builtin = suite.adapters.get(spec)
+    target, _, attr = (builtin.library if builtin else spec).rpartition(":")
+    if not target or not attr:
+        raise UsageError(f"adapter {spec!r}: expected {', '.join(suite.adapters)}, module:attribute or "
+                         "file.py:attribute (or --adapter-cmd for a subprocess)")
+    try:
+        if target.endswith(".py"):
+            if not Path(target).is_file():
+                raise UsageError(f"adapter file {target} does not exist")
+            spec_ = importlib.util.spec_from_file_location(Path(target).stem, target)
+            module = importlib.util.module_from_spec(spec_)
+            spec_.loader.exec_module(module)
+        else:
+            module = importlib.import_module(target)
+        target_ = getattr(module, attr)
+    except UsageError:
+        raise
+    except Exception as exc:
+        raise UsageError(f"cannot load adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
+    if hasattr(target_, "decode") and not inspect.isclass(target_):
+        if arguments:
+            raise UsageError(f"adapter {spec!r} is an object: it takes no --adapter-arg")
+        return target_
+    if not callable(target_):
+        raise UsageError(f"adapter {spec!r} is a {type(target_).__name__}: expected an adapter object, "
+                         "a class or a factory")
+    try:  # a class or a factory
+        return target_(**(arguments or {}))
+    except Exception as exc:
+        raise UsageError(f"cannot create the adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
+
+
+def adapter_choice(args, suite) -> tuple[str, list[str] | None]:
+    """The adapter's name and, for a subprocess adapter, its argv; usage errors for an ambiguous choice."""
+    if args.adapter_cmd is None:
+        name = args.adapter or next(iter(suite.adapters))
+        builtin = suite.adapters.get(name)
+        return name, builtin.argv() if builtin is not None and builtin.argv is not None else None
+    if args.adapter is not None:
+        raise UsageError("give either --adapter or --adapter-cmd, not both")
+    try:
+        argv = shlex.split(args.adapter_cmd)
+    except ValueError as exc:
+        raise UsageError(f"--adapter-cmd cannot be split: {exc}") from exc
+    if not argv:
+        raise UsageError("--adapter-cmd is empty (an unset variable?): give the adapter program to run")
+    return args.adapter_cmd, argv
+
+
+def adapter_arguments(args) -> dict[str, str]:
+    out = {}
+    for item in args.adapter_arg:
+        name, sep, value = item.partition("=")
+        if not sep or not name.isidentifier():
+            raise UsageError(f"--adapter-arg {item!r}: expected NAME=VALUE")
+        out[name] = value
+    return out
+
+
+def open_session(name: str, argv: list[str] | None, args, suite):
+    """The session for the chosen adapter: a subprocess when there is an argv, else a library adapter; either
+    also runs the scenarios of a handler it calls (sessions/calls.py)."""
+    from ..sessions.calls import CallTarget
+    from ..sessions.library import LibrarySession
+
+    if argv is not None:
+        from ..sessions.subprocess import SubprocessSession
+
+        if args.adapter_arg:
+            raise UsageError("--adapter-arg is for library adapters; a subprocess adapter takes its own arguments")
+        return CallTarget(SubprocessSession(argv, name=name, encoding_param=suite.encoding_param, timeout=args.timeout,
+                                            hello_timeout=max(30.0, args.timeout),  # start-up (a JVM, class generation) takes longer
+                                            memory_limit=args.memory_limit * 1024 * 1024))
+    return CallTarget(LibrarySession(load_library_adapter(name, suite, adapter_arguments(args)), name))
+
+
+def started_session(args, suite):
+    """(name, session) of the chosen adapter, started and greeted; usage errors if it cannot be."""
+    from ..core.session import AdapterStartError
+
+    name, argv = adapter_choice(args, suite)
+    session = open_session(name, argv, args, suite)
+    try:
+        session.hello()
+    except AdapterStartError as exc:
+        session.close()
+        raise UsageError(str(exc)) from exc
+    return name, session

@@ -1,0 +1,147 @@
+"""The command line's shared options and the types of its values, in one place: building them imports nothing
+heavy. The numeric bounds are those of ``limits``: what a command accepts is what the readers of its results accept
+back (a recording of a run reads back with the settings it was made with)."""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import math
+from pathlib import Path
+
+from ..limits import STARTUP_MAX, TIME_SCALE_MAX
+from ..suites import names as suite_names
+
+REPORTS = ("json", "junit", "markdown", "html")
+DEFAULT_MEMORY_MB = 2048
+
+
+# ---------------------------------------------------------------- value types
+
+def bounded(top: float | None, what: str = "number of seconds"):
+    """An argparse type: a positive, finite ``what`` no larger than ``top`` (None: unbounded)."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a {what}") from None
+        if not math.isfinite(value) or value <= 0 or (top is not None and value > top):
+            limit = f", at most {top:g}" if top is not None else ""
+            raise argparse.ArgumentTypeError(f"{text!r}: give a positive, finite {what}{limit}")
+        return value
+    return parse
+
+
+positive_seconds = bounded(None)
+startup_seconds = bounded(STARTUP_MAX)
+time_scale = bounded(TIME_SCALE_MAX, "factor")
+
+
+def megabytes(text: str) -> int:
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number of megabytes (0: no limit)")
+    return int(text)
+
+
+def count(text: str) -> int:
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number")
+    return int(text)
+
+
+def system_id(text: str) -> int:
+    """An IMC-style numeric id for --src/--dst of a live run."""
+    try:
+        value = int(text, 0)
+    except ValueError:
+        value = -1
+    if not 0 <= value < 0xFFFF:
+        raise argparse.ArgumentTypeError(f"{text!r}: an id is 0 to 0xFFFE (decimal or 0x hex)")
+    return value
+
+
+def address(text: str) -> str | int:
+    """An IP address, or a system id (decimal or 0x hex), for --src/--dst/--host of a capture."""
+    try:
+        return ipaddress.ip_address(text).compressed
+    except ValueError:
+        pass
+    try:
+        value = int(text, 0)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= 0xFFFF:
+        raise argparse.ArgumentTypeError(f"{text!r}: give an IP address or a system id (0 to 0xFFFF, decimal or 0x hex)")
+    return value
+
+
+def port(text: str) -> int:
+    if not text.isdigit() or not 0 < int(text) < 65536:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a UDP port")
+    return int(text)
+
+
+def offset_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r}: give seconds from the capture's first record (0 or more)")
+    return value
+
+
+# ---------------------------------------------------------------- option groups
+
+def add_suite(parser) -> None:
+    parser.add_argument("--suite", default=suite_names()[0], choices=suite_names(),
+                        help="imc (default): IMC messages 150-216; ros_acomms: ros_acomms_msgs types")
+
+
+def add_selection(parser) -> None:
+    add_suite(parser)
+    parser.add_argument("--edition", help="the edition to judge against (default: the suite's first); imc: imc-5.4.30 "
+                                          "(what imcpy and deployed DUNE speak) or imc-5.4.11 (the seeds as written)")
+    parser.add_argument("--message", action="append", default=[], metavar="NAME",
+                        help="only this message or type (repeatable)")
+    parser.add_argument("--id", action="append", default=[], metavar="GLOB", help="only case ids matching (repeatable)")
+    parser.add_argument("--tag", action="append", default=[], help="only cases with this tag (repeatable), e.g. invalid")
+    parser.add_argument("--vectors", type=Path, metavar="DIR",
+                        help="a suite folder (like vectors/imc) or folder of case files to use instead of the packaged corpus")
+
+
+def add_reports(parser) -> None:
+    for fmt in REPORTS:
+        parser.add_argument(f"--{fmt}", metavar="FILE", help=f"write the {fmt} report to FILE")
+
+
+def add_adapter(parser, *, what: str = "an implementation") -> None:
+    """How to reach an implementation: a built-in or library adapter, or a subprocess."""
+    parser.add_argument("--adapter", help=f"{what}: a built-in adapter of the suite (imc: imcpy, the default, pyimclsts, "
+                                          "imcpy-shim, pyimclsts-shim; ros_acomms: rosbags, the default, genpy), or a "
+                                          "library adapter as module:attribute or file.py:attribute (an object, a class "
+                                          "or a factory)")
+    parser.add_argument("--adapter-arg", action="append", default=[], metavar="NAME=VALUE",
+                        help="an argument for a library adapter's class or factory (repeatable)")
+    parser.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter speaking JSON lines "
+                                                             "(adapters/README.md); split like a shell would, but never "
+                                                             "run by one")
+    parser.add_argument("--timeout", type=positive_seconds, default=5.0,
+                        help="seconds per request for subprocess adapters (default 5)")
+    parser.add_argument("--memory-limit", type=megabytes, default=DEFAULT_MEMORY_MB, metavar="MB",
+                        help=f"data memory a subprocess adapter may use (default {DEFAULT_MEMORY_MB}; 0: no limit): one "
+                             "that tries to allocate what a hostile length asks for fails instead of the machine")
+
+
+def add_judging(parser) -> None:
+    """The options pcap and watch share: what to judge against, which frames, how to report."""
+    add_suite(parser)
+    parser.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
+    parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
+                        help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")
+    parser.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
+    parser.add_argument("--list-frames", type=count, default=20, metavar="N",
+                        help="failing frames listed per message and rule (default 20)")
+    parser.add_argument("--time-scale", type=time_scale, default=1.0, metavar="F",
+                        help="multiply every exchange's time bound by F (slow links)")
+    parser.add_argument("--strict", action="store_true", help="NON_STRICT (a SHOULD not met) and INCONCLUSIVE fail too")

@@ -1,0 +1,173 @@
+"""``imc-conformance run``: a suite's corpus against an implementation (an adapter) or a live node (``--target``)."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import sys
+from pathlib import Path
+
+from ..errors import UsageError
+from .options import add_adapter, add_reports, add_selection, startup_seconds, system_id, time_scale
+
+
+def add(sub) -> None:
+    run = sub.add_parser("run", help="run a suite's corpus against an implementation")
+    add_adapter(run)
+    add_selection(run)
+    run.add_argument("--errata", metavar="KEY", help="the implementation errata that explain failures "
+                                                     "(default: the key the adapter's hello declares)")
+    run.add_argument("--strict", action="store_true", help="NON_STRICT verdicts fail too")
+    run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids with a reason and optional expiry")
+    run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    live = run.add_argument_group("scenarios and live targets")
+    live.add_argument("--target", metavar="URL", help="a live node to run the scenarios against: udp://HOST:PORT or "
+                                                      "imc+udp://HOST:PORT/ (IPv6 as udp://[::1]:PORT)")
+    live.add_argument("--bind", metavar="HOST[:PORT]", help="where the session listens (default: loopback, any port)")
+    live.add_argument("--src", type=system_id, default=None, metavar="ID",
+                      help="the session's own IMC id (default: one of 0x4C01-0x4CFE, chosen for the run)")
+    live.add_argument("--dst", type=system_id, default=None, metavar="ID",
+                      help="the node's IMC id: start at once instead of waiting for a frame from the node")
+    live.add_argument("--startup", type=startup_seconds, default=10.0, metavar="SECONDS",
+                      help="how long to wait for a first valid frame from the target (default 10)")
+    live.add_argument("--allow-multicast", action="store_true",
+                      help="allow a multicast or broadcast target or bind (never needed on loopback)")
+    live.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                      help="what a scenario needs from the target, e.g. peer=lauv-xplore-2 (list --scenarios names them)")
+    live.add_argument("--allow-effects", nargs="?", const="all", metavar="EFFECTS",
+                      help="run scenarios with side effects on the target: all, or a comma-separated list "
+                           "(default: only effect-free scenarios)")
+    live.add_argument("--claims", metavar="FILE", help='JSON {"services": [...]}: the services the target implements; '
+                                                       "scenarios of other services are UNSUPPORTED")
+    live.add_argument("--profile", metavar="NAME", help="where deployed practice differs from the seeds (default seed)")
+    live.add_argument("--time-scale", type=time_scale, default=1.0, metavar="F",
+                      help="multiply every time bound by F (slow links)")
+    live.add_argument("--pcap", metavar="FILE", help="write every datagram of the run as pcapng, each commented "
+                                                     "with its scenario and step (imc-conformance pcap replays it)")
+    live.add_argument("--dry-run", action="store_true", help="print what the scenarios would send, and send nothing")
+    live.add_argument("--robustness", action="store_true",
+                      help="also run the robustness phase: every corpus frame, then 10,000 garbage datagrams, "
+                           "after which every request kind answered before must still be answered")
+    live.add_argument("--replay-effects", action="store_true",
+                      help="with --robustness: also replay the corpus's accepted frames of messages with effects "
+                           "(their destinations are the corpus's own: never against a real vehicle)")
+    live.add_argument("--restart-cmd", metavar="CMD",
+                      help="a command that restarts the target (split like a shell would, never run by one): "
+                           "lets the robustness phase bisect to the frame that silenced it")
+    add_reports(run)
+    run.set_defaults(func=command)
+
+
+def selection(args):
+    """The suite, every case of its corpus, and the cases the options select."""
+    from ..core.cases import select_cases
+    from ..files import open_corpus
+
+    suite, everything = open_corpus(args.suite, args.vectors)
+    args.edition = args.edition or suite.editions[0]
+    if args.edition not in suite.editions:
+        raise UsageError(f"unknown edition {args.edition!r} of the suite {suite.name!r} "
+                         f"(editions: {', '.join(suite.editions)})")
+    unknown = set(args.message) - {g.name for g in suite.groups}
+    if unknown:
+        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    return suite, everything, select_cases(everything, args.edition, args.message, args.id, args.tag)
+
+
+def command(args) -> int:
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    from .. import live
+    from ..core.runner import run_cases
+    from ..core.session import AdapterStartError
+    from ..core.verdicts import failing
+    from ..core.waivers import WaiverError
+    from ..files import load_waivers
+    from ..escaping import printable
+    from ..render.terminal import print_result
+    from .adapters import adapter_choice, open_session
+    from .output import report_targets, terminal, write_file, write_reports
+
+    targets = report_targets(args)
+    suite, everything, cases = selection(args)
+    try:
+        options = live.options(args, suite, everything)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    if args.target and (args.adapter or args.adapter_cmd):
+        raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd, not both")
+    name, argv = (args.target, None) if args.target else adapter_choice(args, suite)
+    if not cases:
+        raise UsageError("the selection matches no case")
+    if args.dry_run:
+        if args.pcap:
+            raise UsageError("--pcap records what a run sends and receives; --dry-run sends nothing")
+        return live.dry_run(suite, cases, args, options)
+    waivers, notes = {}, []
+    if args.waivers:
+        try:
+            waivers, notes = load_waivers(Path(args.waivers), {c.id for c in everything}, dt.date.today())
+        except WaiverError as exc:
+            raise UsageError(str(exc)) from exc
+    console = terminal()
+    args.first_unique = live.first_unique() if args.target else None
+    recorder = open_recording(args, suite, cases, options)
+    try:
+        session = live.open_target(args, suite, recorder) if args.target else open_session(name, argv, args, suite)
+    except ValueError as exc:
+        if recorder is not None:
+            recorder.close(complete=False)
+        raise UsageError(str(exc)) from exc
+    result = None
+    try:
+        with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                      console=Console(stderr=True, emoji=False), transient=True, disable=args.no_progress) as bar:
+            task = bar.add_task("running", total=None)
+            result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
+                               waivers=waivers, strict=args.strict, notes=notes + live.notes(args, options),
+                               progress=lambda n: bar.update(task, completed=n), options=options)
+    except AdapterStartError as exc:
+        raise UsageError(str(exc)) from exc
+    finally:
+        session.close()
+        if recorder is not None:
+            recorder.close(complete=result is not None and result.complete)
+    print_result(result, console)
+    problems = write_reports(result, targets, console)
+    if recorder is not None and recorder.failed:
+        print(f"imc-conformance: cannot write the pcapng to {printable(str(args.pcap))}: {recorder.failed} (the run "
+              "and its other reports went on)", file=sys.stderr)
+        problems += 1
+    elif recorder is not None:
+        console.print(f"pcapng of the exchange ({recorder.count} datagrams): {printable(str(args.pcap))}",
+                      highlight=False, markup=False)
+    if args.write_waivers:
+        from ..core.waivers import waivers_document
+        failing_ids = [c.id for c in result.cases if failing(c.verdict, strict=False)]
+        reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
+        problems += write_file(Path(args.write_waivers), json.dumps(waivers_document(failing_ids, reason), indent=1) + "\n",
+                               f"waivers file ({len(failing_ids)} waivers)", console)
+    if not result.complete:
+        print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
+        return result.exit_code()
+    return 2 if problems else result.exit_code()
+
+
+def open_recording(args, suite, cases, options):
+    """The recorder of ``--pcap`` (a live run's datagrams as pcapng), or None."""
+    if not args.pcap:
+        return None
+    if not args.target:
+        raise UsageError("--pcap records a live run's datagrams: give --target udp://HOST:PORT")
+    from ..capture.recording import Recorder, about_run
+
+    ids = [c.id for c in cases if c.kind == "scenario"]
+    about = about_run(suite.name, args.edition, ids, options, args.target, args.src, args.dst, args.startup,
+                      args.first_unique)
+    try:
+        Path(args.pcap).parent.mkdir(parents=True, exist_ok=True)
+        return Recorder(Path(args.pcap), about)
+    except OSError as exc:
+        raise UsageError(f"cannot write the pcapng to {args.pcap}: {exc.strerror or exc}") from exc

@@ -1,0 +1,31 @@
+"""The ros_acomms suite's own command: ``ros-msg-files``, an edition's .msg and .srv files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def add(sub) -> None:
+    files = sub.add_parser("ros-msg-files", help="write ros_acomms_msgs .msg and .srv files of an edition")
+    files.add_argument("folder", type=Path, help="where to write msg/ and srv/ (created if need be)")
+    files.add_argument("--edition", help="the edition (default: the suite's first: seed; or 9.0.0)")
+    files.add_argument("--replace", action="store_true", help="replace files that are there already")
+    files.set_defaults(func=command)
+
+
+def command(args) -> int:
+    from ...errors import UsageError
+    from . import load
+    from .package_files import write_package
+
+    suite = load()
+    edition = args.edition or suite.editions[0]
+    if edition not in suite.editions:
+        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
+    try:
+        written, left_out = write_package(suite.defs.edition(edition), args.folder, args.replace)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    print(f"wrote {len(written)} files under {args.folder}" +
+          (f"; left out of edition {edition}: {', '.join(left_out)}" if left_out else ""))
+    return 0
