@@ -76,21 +76,33 @@ class _Converter:
         proto = imcpy.Factory.produce(mdef.abbrev)
         self.abbrev, self.cls = mdef.abbrev, type(proto)
         self.put, attrs, self.names, self.getters = {}, [], [], []
+        self.plain = {}  # field -> (imcpy attribute, conversion or None): the fast way in, used while nothing fails
         for f in mdef.fields:
             attr = f.abbrev if hasattr(proto, f.abbrev) else f.abbrev.lower()
             if not hasattr(proto, attr):
                 raise AttributeError(f"imcpy's {mdef.abbrev} has no attribute {f.abbrev!r} nor {attr!r}")
             where = f"{mdef.abbrev}.{f.abbrev}"
             self.put[f.abbrev] = adapter._putter(f, attr, where)
+            self.plain[f.abbrev] = (attr, adapter._converter(f))
             attrs.append(attr)
             self.names.append(f.abbrev)
             self.getters.append(adapter._getter(f))
         # one C-level call fetches every attribute (attrgetter of one name returns the bare value)
         self.fetch = attrgetter(*attrs) if len(attrs) > 1 else (lambda m, a=attrs: tuple(getattr(m, x) for x in a))
+        # the fields whose values need converting (the others are taken as imcpy gives them)
+        self.converted = [(i, name, get) for i, (name, get) in enumerate(zip(self.names, self.getters)) if get]
 
     def fill(self, msg, fields) -> None:
         if not isinstance(fields, dict):
             raise Rejected(f"{self.abbrev}: fields must be an object", rule="value-type")
+        try:  # the fast way; on any trouble, again field by field, for the refusal the field's putter names
+            plain = self.plain
+            for name, value in fields.items():
+                attr, convert = plain[name]
+                setattr(msg, attr, convert(value) if convert is not None else value)
+            return
+        except Exception:  # noqa: BLE001 - only to take the careful way below
+            pass
         for name, value in fields.items():
             put = self.put.get(name)
             if put is None:
@@ -98,7 +110,11 @@ class _Converter:
             put(msg, value)
 
     def fields(self, msg) -> dict:
-        return {name: get(value) if get else value for name, get, value in zip(self.names, self.getters, self.fetch(msg))}
+        values = self.fetch(msg)
+        out = dict(zip(self.names, values))
+        for i, name, get in self.converted:
+            out[name] = get(values[i])
+        return out
 
 
 class ImcpyAdapter:
@@ -112,8 +128,10 @@ class ImcpyAdapter:
             (h.abbrev, defs.header_defaults[h.abbrev], self._putter(h, h.abbrev, f"header.{h.abbrev}")) for h in header
         ]
         self._header_names = [h.abbrev for h in header]
+        self._header_plain = [(h.abbrev, defs.header_defaults[h.abbrev], h.abbrev) for h in header]
         self._header_getters = [self._getter(h) for h in header]
         self._header_fetch = attrgetter(*self._header_names)
+        self._header_converted = [(i, h.abbrev, get) for i, (h, get) in enumerate(zip(header, self._header_getters)) if get]
         self._by_abbrev = {m.abbrev: _Converter(self, m) for m in defs.messages}
         self._by_class = {c.cls: c for c in self._by_abbrev.values()}
 
@@ -129,8 +147,12 @@ class ImcpyAdapter:
         header = message.get("header", {})
         if not isinstance(header, dict):
             raise Rejected("header must be an object", rule="value-type")
-        for name, default, put in self._header_put:
-            put(msg, header.get(name, default))
+        try:  # the fast way, as for fields
+            for name, default, attr in self._header_plain:
+                setattr(msg, attr, header.get(name, default))
+        except Exception:  # noqa: BLE001 - only to take the careful way below
+            for name, default, put in self._header_put:
+                put(msg, header.get(name, default))
         try:
             return msg.serialize()
         except RuntimeError as exc:
@@ -143,8 +165,10 @@ class ImcpyAdapter:
         except RuntimeError as exc:
             raise Rejected(str(exc), rule=_dune_rule(str(exc))) from exc
         out = self._message_out(msg)
-        header = {name: get(value) if get else value
-                  for name, get, value in zip(self._header_names, self._header_getters, self._header_fetch(msg))}
+        values = self._header_fetch(msg)
+        header = dict(zip(self._header_names, values))
+        for i, name, get in self._header_converted:
+            header[name] = get(values[i])
         return {"abbrev": out["abbrev"], "header": header, "fields": out["fields"]}
 
     # ------------------------------------------------------------ decoded form -> imcpy
@@ -172,6 +196,19 @@ class ImcpyAdapter:
         if not isinstance(value, dict):
             raise ValueError("an inline message must be an object or null")
         return self._message_in(value)
+
+    def _converter(self, f: FieldDef):
+        """The conversion of a field's decoded value to what imcpy's setter takes (None: as it is)."""
+        if f.type == "message-list":
+            def convert_list(value):
+                if not isinstance(value, list):
+                    raise ValueError("a message-list must be an array")
+                return [self._inline_in(element) for element in value]
+            return convert_list
+        if f.is_float:
+            width, bits, floats = f.size, _BITS[f.size], _FLOATS[f.size]
+            return lambda value: floats.unpack(bits.pack(float_to_bits(value, width)))[0] if isinstance(value, str) else value
+        return {"plaintext": text_bytes, "rawdata": raw_bytes, "message": self._inline_in}.get(f.type)
 
     def _putter(self, f: FieldDef, attr: str, where: str):
         """A function (imcpy message, decoded value) -> None storing one field, raising Rejected."""

@@ -22,6 +22,7 @@ from .core.suite import Suite
 from .core.waivers import Waiver, WaiverError, waivers_in_force
 from .paths import VECTORS
 from .suites import load_suite
+from .suites.data_suite import manifest, trusted
 
 
 @cache
@@ -67,13 +68,16 @@ def read_json(path: Path, error=ValueError):
 
 # ---------------------------------------------------------------- case files
 
-def open_corpus(suite_name: str, directory: Path | None = None) -> tuple[Suite, list[Case]]:
+def open_corpus(suite_name: str, directory: Path | None = None,
+                groups: frozenset[str] | None = None) -> tuple[Suite, list[Case]]:
     """The suite and its cases: the packaged corpus, or ``directory`` given as a suite folder (holding
-    ``cases/`` and maybe its own definitions and errata) or as a folder of case files."""
+    ``cases/`` and maybe its own definitions and errata) or as a folder of case files. ``groups``: only the cases
+    of these groups are wanted; the packaged corpus then reads only their files (its manifest says which file
+    holds which group), a folder given instead is read whole."""
     try:
         if directory is None:
             suite = load_suite(suite_name)
-            return suite, read_cases(suite, tuple(suite.case_folders.items()))
+            return suite, read_cases(suite, tuple(suite.case_folders.items()), groups=groups)
         folder = Path(directory)
         if not folder.is_dir():
             raise CorpusError(f"{folder}: {'not a directory' if folder.exists() else 'no such directory'}")
@@ -88,13 +92,19 @@ def open_corpus(suite_name: str, directory: Path | None = None) -> tuple[Suite, 
 
 
 @cache
-def read_cases(suite: Suite, folders: tuple[tuple[str, str], ...], bare: Path | None = None) -> list[Case]:
-    """Every case of the suite's case folders (sub-folder name, kind), each file checked; ids unique."""
+def read_cases(suite: Suite, folders: tuple[tuple[str, str], ...], bare: Path | None = None,
+               groups: frozenset[str] | None = None) -> list[Case]:
+    """Every case of the suite's case folders (sub-folder name, kind), each file checked unless the packaged
+    manifest vouches for its bytes; ids unique. ``groups``: skip the packaged files the manifest files elsewhere."""
+    listed = manifest(suite.packaged) if groups is not None and bare is None and suite.folder == suite.packaged else {}
     cases, seen, found = [], set(), False
     for sub, kind in folders:
         folder = bare or suite.folder / sub
         for path in sorted(folder.glob("*.json")):
             found = True
+            entry = listed.get(f"{sub}/{path.name}")
+            if entry is not None and entry["group"] not in groups:
+                continue
             for case in read_case_file(suite, kind, path):
                 if case.id in seen:
                     raise CorpusError(f"{path}: the case id {case.id} appears twice in the corpus")
@@ -106,7 +116,20 @@ def read_cases(suite: Suite, folders: tuple[tuple[str, str], ...], bare: Path | 
 
 
 def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
-    raw, doc = read_json(path, CorpusError)
+    """The cases of one file: a packaged file as the generator recorded it is taken as it is; any other is read
+    bounded and checked (schema, then every case against the definitions)."""
+    try:
+        raw = inputs.read_bytes(path)
+    except ValueError as exc:
+        raise CorpusError(str(exc)) from None
+    if trusted(path, raw, suite.packaged):
+        doc = json.loads(raw)
+        group = suite.group_of(doc)
+        return [Case(data["id"], group, kind, data) for data in doc["cases"]]
+    try:
+        doc = inputs.parse_json(raw, str(path))
+    except ValueError as exc:
+        raise CorpusError(str(exc)) from None
     problem = schema_error(suite.schema(kind), doc, str(path), memo=raw)
     if problem:
         raise CorpusError(problem)

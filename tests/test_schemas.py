@@ -21,7 +21,7 @@ from imc_conformance.paths import VECTORS
 SCHEMA_DIR = VECTORS / "schema"
 ROS_SCHEMAS = ("ros_acomms-definitions", "ros_acomms-vectors", "ros_acomms-errata", "ros_acomms-examples")
 SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples", "scenarios", "robustness", "exchanges",
-                "profile", "statements",
+                "profile", "statements", "manifest",
                 *ROS_SCHEMAS, "waivers", "result")
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
 IMC = VECTORS / "imc"
@@ -35,6 +35,8 @@ def schema_name_for(path: Path) -> str:
     ros_acomms/cases/*.json follow ros_acomms-vectors, ros_acomms/{rules,exchanges,statements}.json the shared
     schemas, and
     ros_acomms/<name>.json ros_acomms-<name>."""
+    if path.name == "manifest.json":
+        return "manifest"
     if path.parent == IMC / "cases":
         return "vectors"
     if path.parent.name in ("scenarios", "robustness"):

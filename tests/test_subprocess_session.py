@@ -57,7 +57,7 @@ def jobs_of(cases, editions=(EDITION,)) -> dict:
     for case in cases:
         for edition in editions:
             for request in KIND.plan(case.data, edition, {"le", "be"}):
-                jobs.setdefault((case.id, request.check), Job(f"{case.id}#{request.check}", "imc", case.id, request))
+                jobs.setdefault((case.id, request.check), Job("imc", case.id, request))
     return jobs
 
 

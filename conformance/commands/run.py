@@ -60,11 +60,14 @@ def add(sub) -> None:
 
 
 def selection(args):
-    """The suite, every case of its corpus, and the cases the options select."""
+    """The suite, the cases of its corpus that were read, and the cases the options select. Only the files of the
+    selected messages are read (``--message``, or an id glob naming one) unless the run needs the whole corpus
+    (waivers name any case; the robustness phase replays every frame)."""
     from ..core.cases import select_cases
     from ..files import open_corpus
 
-    suite, everything = open_corpus(args.suite, args.vectors)
+    whole = getattr(args, "waivers", None) or getattr(args, "robustness", False)
+    suite, everything = open_corpus(args.suite, args.vectors, None if whole else selected_groups(args))
     args.edition = args.edition or suite.editions[0]
     if args.edition not in suite.editions:
         raise UsageError(f"unknown edition {args.edition!r} of the suite {suite.name!r} "
@@ -73,6 +76,19 @@ def selection(args):
     if unknown:
         raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
     return suite, everything, select_cases(everything, args.edition, args.message, args.id, args.tag)
+
+
+def selected_groups(args) -> frozenset[str] | None:
+    """The groups (messages, types) the selection can only come from, or None when it may come from any."""
+    if args.message:
+        return frozenset(args.message)  # an id glob only narrows them further
+    named = set()
+    for glob in args.id:
+        parts = glob.split("/")
+        if len(parts) < 2 or any(c in parts[1] for c in "*?["):
+            return None
+        named.add(parts[1])
+    return frozenset(named) or None
 
 
 def command(args) -> int:

@@ -65,7 +65,7 @@ class Incident:
     cases: list[str]
 
 
-@dataclass
+@dataclass(slots=True)
 class CaseResult:
     id: str
     message: str

@@ -4,6 +4,7 @@ pytest plugin, the benchmark and the tests all run cases here; the session does 
 from __future__ import annotations
 
 import datetime as dt
+import gc
 import time
 from collections import Counter, defaultdict
 from typing import Callable
@@ -13,8 +14,11 @@ from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, RunResult, message_verdict
 from .session import Answer, Job, Session
 from .suite import Suite
-from .verdicts import Verdict, failing, worst
+from .verdicts import FAILING, SEVERITY, Verdict, failing, worst
 from .waivers import Waiver
+
+
+PROGRESS_EVERY = 64  # answers between calls of a run's progress callback
 
 
 def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str, adapter: str,
@@ -22,7 +26,8 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
               notes: list[str] | None = None, progress: Callable[[int], None] | None = None,
               options: dict | None = None, clock: Callable[[], float] = time.perf_counter,
               started: str | None = None) -> RunResult:
-    """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far).
+    """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far, every
+    ``PROGRESS_EVERY`` answers and at the end).
 
     ``options``: the run's settings the case kinds read (e.g. a scenario's parameters, allowed effects). A kind
     may decline a case (``admit``: the reason, listed in the notes) and may plan a request no implementation
@@ -33,11 +38,26 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     Ctrl-C (KeyboardInterrupt) while cases run ends the run early: the result then holds the cases whose
     every check was answered and is marked incomplete. ``errata`` names the implementation errata that
     annotate failures (default: the key the adapter's hello declares, if any).
+
+    The cyclic garbage collector is paused while the run lasts: a run makes little cyclic garbage, and each full
+    collection would walk the whole loaded corpus again.
     """
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        return _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
+                    started)
+    finally:
+        if collecting:
+            gc.enable()
+
+
+def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
+         started) -> RunResult:
     started = started or dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = clock()
     hello = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
-    emits = set(hello["emits"])
+    emits = frozenset(hello["emits"])
     errata = errata or hello["errata"]
     options = options or {}
     notes = list(notes or [])
@@ -48,22 +68,23 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
         raise ValueError(f"cases filed under {', '.join(strays)}, which the suite {suite.name!r} does not have")
     cases, why = admitted(suite, cases, hello["kinds"], options)
     notes += why
-    plans = {c.id: suite.kinds[c.kind].plan(c.data, edition, emits, options) for c in cases}
-    by_id = {c.id: c for c in cases}
-    jobs = [Job(f"{c.id}#{r.check}", suite.name, c.id, r) for c in cases for r in plans[c.id]]
-    results: dict[str, list[CheckResult]] = defaultdict(list)
+    kinds, name = suite.kinds, suite.name
+    plans = {c.id: kinds[c.kind].plan(c.data, edition, emits, options) for c in cases}
+    jobs = [Job(name, c.id, r) for c in cases for r in plans[c.id]]
+    # per case: its data, how it is judged, and what its checks found (judged in place as answers come)
+    judges = {c.id: (c.data, kinds[c.kind].judge, []) for c in cases}
     timelines: dict[str, list[dict]] = {}
-    answered: Counter = Counter()
+    answered: list[str] = []  # the case of each job answered (counted if the run is interrupted)
 
     def judge(job: Job, answer: Answer) -> None:
-        case = by_id[job.case_id]
-        judged = suite.kinds[case.kind].judge(case.data, edition, job.request, answer)
-        if isinstance(judged, Judgement):
-            results[case.id] += judged.checks
-            timelines[case.id] = judged.timeline
+        data, judge_, found = judges[job.case_id]
+        judged = judge_(data, edition, job.request, answer)
+        if judged.__class__ is Judgement:
+            found += judged.checks
+            timelines[job.case_id] = judged.timeline
         else:
-            results[case.id].append(judged)
-        answered[case.id] += 1
+            found.append(judged)
+        answered.append(job.case_id)
 
     complete = True
     try:
@@ -71,35 +92,48 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
             if job.request.op == "skip":
                 judge(job, Answer("skipped", reason=job.request.params.get("reason", "")))
         live = [job for job in jobs if job.request.op != "skip"]
+        done = 0
         for done, (job, answer) in enumerate(session.run(live), 1):
             judge(job, answer)
-            if progress:
+            if progress and not done % PROGRESS_EVERY:
                 progress(done)
+        if progress:
+            progress(done)
     except KeyboardInterrupt:
         complete = False
     if not complete:
-        cases = [c for c in cases if plans[c.id] and answered[c.id] == len(plans[c.id])]
+        counts = Counter(answered)
+        cases = [c for c in cases if plans[c.id] and counts[c.id] == len(plans[c.id])]
         notes.insert(0, f"interrupted: {len(cases)} of {len(plans)} cases were done; the others are not in this result")
     untested, why = hello_gaps(suite, cases, edition, emits, plans)
     notes += why + list(getattr(session, "notes", ()))
     waivers = waivers or {}
     filed: dict[str, list[CaseResult]] = defaultdict(list)
+    severity, pass_ = SEVERITY.__getitem__, Verdict.PASS
     for case in cases:
-        own = [r for r in results.get(case.id, ()) if r.filed_under is None]
-        checks = own if case.id in timelines else sorted(own, key=lambda r: r.check)
-        verdict = worst(r.verdict for r in checks)
+        found = judges[case.id][2]
+        elsewhere = [r for r in found if r.filed_under is not None]
+        checks = [r for r in found if r.filed_under is None] if elsewhere else found
+        if case.id not in timelines and len(checks) > 1:
+            checks = sorted(checks, key=_check_name)
+        if len(checks) == 1:
+            verdict = checks[0].verdict
+        else:
+            verdicts = {r.verdict for r in checks}
+            verdict = pass_ if verdicts == {pass_} else min(verdicts, key=severity, default=Verdict.UNSUPPORTED)
         waiver = waivers.get(case.id)
         if waiver is not None:
             verdict = Verdict.WAIVED if failing(verdict, strict=True) else Verdict.WAIVER_STALE
         explained = (suite.implementation_errata(case.id, errata, case.data.get("tags", ()))
-                     if failing(verdict, strict=False) else [])
-        filed[case.group].append(CaseResult(case.id, case.group, verdict, expectation(case.data, edition),
-                                            case.data["clause"], checks, case.data.get("rule"), explained,
+                     if verdict in FAILING else [])
+        data = case.data
+        filed[case.group].append(CaseResult(case.id, case.group, verdict, expectation(data, edition),
+                                            data["clause"], checks, data.get("rule"), explained,
                                             waiver.reason if waiver else None, timelines.get(case.id, [])))
-        for group, found in findings_elsewhere(results.get(case.id, ()), groups).items():
-            case_id = f"{suite.name}/{group}/passive/{case.id.split('/', 1)[1]}"
-            filed[group].append(CaseResult(case_id, group, worst(r.verdict for r in found), None, found[0].clause or "",
-                                           found))
+        for group, passive in (findings_elsewhere(elsewhere, groups).items() if elsewhere else ()):
+            case_id = f"{name}/{group}/passive/{case.id.split('/', 1)[1]}"
+            filed[group].append(CaseResult(case_id, group, worst(r.verdict for r in passive), None,
+                                           passive[0].clause or "", passive))
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
                 for g in suite.groups if g.name in filed]
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
@@ -107,14 +141,20 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
                      list(session.incidents), untested)
 
 
+def _check_name(result: CheckResult) -> str:
+    return result.check
+
+
 def admitted(suite: Suite, cases: list[Case], kinds: list[str], options: dict) -> tuple[list[Case], list[str]]:
     """The cases to run: those of the kinds the session runs that their kind admits; and notes on the rest."""
     out, declined, other = [], defaultdict(list), Counter()
+    admits = {kind: getattr(suite.kinds[kind], "admit", None) for kind in kinds if kind in suite.kinds}
     for case in cases:
-        if case.kind not in kinds:
+        if case.kind not in admits:
             other[case.kind] += 1
             continue
-        reason = getattr(suite.kinds[case.kind], "admit", lambda *_: None)(case.data, options)
+        admit = admits[case.kind]
+        reason = admit(case.data, options) if admit is not None else None
         if reason:
             declined[reason].append(case.id)
         else:

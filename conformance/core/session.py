@@ -27,6 +27,7 @@ class Request:
     message: dict | None = None
     frame: bytes | None = None
     params: dict = field(default_factory=dict)
+    context: object = None  # what the case kind that planned it keeps for judging the answer (sessions ignore it)
 
 
 @dataclass(slots=True)
@@ -44,9 +45,8 @@ class Answer:
 
 @dataclass(slots=True)
 class Job:
-    """One request of one case: ``key`` is unique within a run (case id + check)."""
+    """One request of one case (its check names it within the case)."""
 
-    key: str
     suite: str
     case_id: str
     request: Request

@@ -76,7 +76,7 @@ class CallTarget:
         """One call of the scenario as a request of the adapter's session."""
         body = dict(composed.data)
         op = body.pop("op")
-        call = Job(f"{job.key}:{n}", job.suite, job.case_id, Request(f"{op}-{n}", op, params=body))
+        call = Job(job.suite, job.case_id, Request(f"{op}-{n}", op, params=body))
         answered = [answer for _, answer in self.inner.run([call])]
         return answered[0] if answered else Answer("adapter-error", reason="the adapter session gave no answer")
 

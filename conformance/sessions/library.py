@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Iterable, Iterator
 
 from ..adapter_api import Rejected, Unsupported
-from ..core.session import AdapterStartError, Answer, Job, Request
+from ..core.session import AdapterStartError, Answer, Job
 
 
 def _call(fn, *args, acknowledge: bool = False, **kwargs) -> Answer:
@@ -26,6 +26,11 @@ def _call(fn, *args, acknowledge: bool = False, **kwargs) -> Answer:
         return Answer("unsupported", reason=str(exc))
     except Exception as exc:  # an adapter bug must never pass a case
         return Answer("adapter-error", reason=f"{type(exc).__name__}: {exc}")
+    kind = result.__class__
+    if kind is dict:
+        return Answer("ok", message=result)
+    if kind is bytes:
+        return Answer("ok", frame=result)
     if acknowledge and result is None:
         return Answer("ok", message={})
     if isinstance(result, dict):
@@ -56,21 +61,23 @@ class LibrarySession:
     def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
         decoded: dict[str, Answer] = {}  # by encoding, for the current case
         case = None
+        decode, encode = getattr(self.adapter, "decode", None), getattr(self.adapter, "encode", None)  # a handler has none
         for job in jobs:
             request = job.request
+            op = request.op
             if job.case_id != case:
                 decoded.clear()
                 case = job.case_id
-            if request.op in ("decode", "roundtrip"):
+            if op == "decode" or op == "roundtrip":
                 key = request.encoding
-                answer = decoded.pop(key, None) or self._decode(job.suite, request)
-                if request.op == "decode":
+                answer = decoded.pop(key, None) or _call(decode, job.suite, request.frame, **request.params)
+                if op == "decode":
                     decoded[key] = answer  # kept for this frame's roundtrip check, which follows in plan order
                     yield job, answer
                 else:
-                    yield job, self._encode(job.suite, answer.message, request) if answer.kind == "ok" else answer
-            elif request.op == "encode":
-                yield job, self._encode(job.suite, request.message, request)
+                    yield job, _call(encode, job.suite, answer.message, key) if answer.kind == "ok" else answer
+            elif op == "encode":
+                yield job, _call(encode, job.suite, request.message, request.encoding)
             elif request.op in ("setup", "call", "publish"):
                 method = getattr(self.adapter, request.op, None)
                 yield job, (_call(method, job.suite, acknowledge=request.op != "call", **request.params) if method
@@ -79,13 +86,6 @@ class LibrarySession:
                 describe = getattr(self.adapter, "describe", None)
                 yield job, (_call(describe, job.suite, **request.params) if describe is not None
                             else Answer("unsupported", reason="the adapter has no describe operation"))
-
-    def _decode(self, suite: str, request: Request) -> Answer:
-        return _call(self.adapter.decode, suite, bytes.fromhex(request.frame),
-                     **{k: v for k, v in request.params.items()})
-
-    def _encode(self, suite: str, message, request: Request) -> Answer:
-        return _call(self.adapter.encode, suite, message, request.encoding)
 
     @property
     def stderr(self) -> str:

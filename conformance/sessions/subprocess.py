@@ -248,7 +248,7 @@ def _first_call(job: Job, encoding_param: str) -> _Call:
         return _Call(job, {"op": "encode", "suite": job.suite, "message": request.message, encoding_param: request.encoding})
     if request.op in ("describe", "setup", "call", "publish"):
         return _Call(job, {"op": request.op, "suite": job.suite, **request.params})
-    body = {"op": "decode", "suite": job.suite, "frame": request.frame, **request.params}
+    body = {"op": "decode", "suite": job.suite, "frame": request.frame.hex(), **request.params}
     return _Call(job, body, then_encode=request.op == "roundtrip")
 
 

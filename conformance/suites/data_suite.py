@@ -1,24 +1,45 @@
 """What the suites share: definitions, rules and errata as JSON files of a data folder, and writing (or checking)
 the files a generator builds.
 
-The packaged files were checked when they were built (and by the tests); a file of a folder given instead with
-``--vectors`` is a user's: it is read bounded and checked against its schema, and a problem is a corpus error
-naming the file and the JSON path."""
+The packaged files were checked when they were built (and by the tests), and ``manifest.json`` holds the SHA-256
+of each as built: a packaged file whose bytes are those is trusted as it is, without a check at every run. Any
+other file (a packaged one changed since, or one of a folder given instead with ``--vectors``: a user's) is read
+bounded and checked against its schema, and a problem is a corpus error naming the file and the JSON path."""
 
 from __future__ import annotations
 
+import hashlib
 import json
-from functools import cached_property
+from functools import cache, cached_property
 from pathlib import Path
 
 from ..core.suite import Suite
 
+MANIFEST = "manifest.json"
+
+
+@cache
+def manifest(packaged: Path) -> dict[str, dict]:
+    """The packaged folder's manifest: file (relative path) -> {"sha256", and for case files "group", "kind"}."""
+    path = packaged / MANIFEST
+    return json.loads(path.read_bytes())["files"] if path.exists() else {}
+
+
+def trusted(path: Path, raw: bytes, packaged: Path) -> bool:
+    """Whether ``raw`` are the bytes of a packaged file as the generator recorded them."""
+    if not path.is_relative_to(packaged):
+        return False
+    entry = manifest(packaged).get(path.relative_to(packaged).as_posix())
+    return entry is not None and entry["sha256"] == hashlib.sha256(raw).hexdigest()
+
 
 def read_data_file(path: Path, schema: str | None, packaged: Path):
-    """The JSON document of a suite's data file: as it is when packaged, else bounded and checked against
-    ``schema`` (a file of vectors/schema); CorpusError naming the file and the JSON path of a problem."""
+    """The JSON document of a suite's data file: as it is when packaged and unchanged, else bounded and checked
+    against ``schema`` (a file of vectors/schema); CorpusError naming the file and the JSON path of a problem."""
     if path.is_relative_to(packaged):
-        return json.loads(path.read_text(encoding="utf-8"))
+        raw = path.read_bytes()
+        if trusted(path, raw, packaged):
+            return json.loads(raw)
     from ..errors import CorpusError
     from ..files import schema_error
     from ..inputs import read_json
@@ -103,9 +124,31 @@ class DataSuite(Suite):
         return read_data_file(path, self.data_schemas.get("errata.json"), self.packaged)["errata"]
 
 
-def write_generated(root: Path, files: dict[str, str], check: bool, label: str) -> int:
-    """Write the generated ``files`` (relative to ``root``) and remove case files no longer generated; with
-    ``check``, only print what differs (exit code 1 if anything does)."""
+def manifest_text(suite: DataSuite, files: dict[str, str]) -> str:
+    """The manifest of the suite's packaged folder once the generated ``files`` are written: the SHA-256 of every
+    JSON file in it (case files also with their group and kind), so a run can trust them without checking each."""
+    root, kinds = suite.packaged, suite.case_folders
+    names = {p.relative_to(root).as_posix() for p in root.rglob("*.json")} | {n for n in files if n.endswith(".json")}
+    entries = {}
+    for name in sorted(names - {MANIFEST}):
+        text = files[name] if name in files else (root / name).read_text(encoding="utf-8")
+        entry = {"sha256": hashlib.sha256(text.encode("utf-8")).hexdigest()}
+        folder = name.split("/")[0]
+        if "/" in name and folder in kinds:
+            entry.update(group=suite.group_of(json.loads(text)), kind=kinds[folder])
+        entries[name] = entry
+    doc = {"$schema": "../schema/manifest.schema.json", "format": 1, "description": "Written by imc-conformance generate: the SHA-256 of every JSON file of this "
+                                       "folder as built and checked; a run trusts a file whose bytes match and checks "
+                                       "any other against its schema.", "files": entries}
+    return json.dumps(doc, indent=1) + "\n"
+
+
+def write_generated(suite: DataSuite, files: dict[str, str], check: bool, label: str) -> int:
+    """Write the generated ``files`` (relative to the suite's packaged folder) and its manifest, and remove case
+    files no longer generated; with ``check``, only print what differs (exit code 1 if anything does)."""
+    root = suite.packaged
+    files = dict(files)
+    files[MANIFEST] = manifest_text(suite, files)
     drift = [name for name, text in files.items()
              if not (root / name).exists() or (root / name).read_text(encoding="utf-8") != text]
     stale = [p.relative_to(root).as_posix() for p in sorted((root / "cases").glob("*.json"))

@@ -7,12 +7,20 @@ exactly the message, re-encode its own decoding to the same bytes, describe the 
 give its own frames or decoded message). ``plan`` lists
 the requests a case needs for an implementation that emits some encodings; ``judge`` turns each answer
 into a check verdict, keeping both frames and the differing bytes (named by field) of a failure.
+
+Each case is compiled once per edition (``_Compiled``: its expectation, its frames as bytes, its requests by
+the encodings an implementation emits, and the canonical bytes of its decoded message), so that a run spends
+its time on the implementation, not on re-reading the corpus's hex: a decoded answer whose canonical JSON is the
+expected one's is a PASS at once (``orjson`` writes ``-0.0``, ``1.0`` and ``true`` apart from ``0.0``, ``1`` and
+``1``, so equal bytes mean equal values of equal types); any other goes through the suite's comparison policy.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
+
+import orjson
 
 from ...core.cases import expectation
 from ...core.results import ByteDiff, CheckResult
@@ -62,6 +70,17 @@ class VectorCodec(Protocol):
         """How an answered description of a type differs from the expected one."""
 
 
+@dataclass
+class _Compiled:
+    """A case as a run needs it, worked out once per edition."""
+
+    case: dict  # kept: the cache is keyed by its identity
+    expect: str | None
+    frames: dict[str, bytes]
+    canonical: bytes | None  # orjson bytes of the expected decoded message
+    plans: dict[frozenset, list[Request]] = field(default_factory=dict)  # by the encodings emitted
+
+
 class VectorKind:
     """Plans and judges the byte vectors of one suite."""
 
@@ -69,41 +88,78 @@ class VectorKind:
 
     def __init__(self, codec: VectorCodec):
         self.codec = codec
+        self._compiled: dict[tuple[int, str], _Compiled] = {}
+        self._passes: dict[str, CheckResult] = {}  # the PASS of each check name, shared (never changed)
+
+    def compiled(self, case: dict, edition: str) -> _Compiled:
+        key = (id(case), edition)
+        found = self._compiled.get(key)
+        if found is None:
+            message = case.get("message")
+            found = self._compiled[key] = _Compiled(
+                case, expectation(case, edition), {e: bytes.fromhex(h) for e, h in case.get("frames", {}).items()},
+                orjson.dumps(message) if message is not None else None)
+        return found
 
     # ------------------------------------------------------------ planning
 
     def plan(self, case: dict, edition: str, emits: set[str], options: dict | None = None) -> list[Request]:
         """The requests to make for ``case``; encoding in an encoding the implementation does not emit is not
-        applicable."""
-        if expectation(case, edition) is None:
+        applicable. (The list is the compiled case's: a caller must not change it.)"""
+        compiled = self.compiled(case, edition)
+        key = emits if isinstance(emits, frozenset) else frozenset(emits)
+        plan = compiled.plans.get(key)
+        if plan is None:
+            plan = compiled.plans[key] = self._plan(case, compiled, emits)
+        return plan
+
+    def _plan(self, case: dict, compiled: _Compiled, emits: set[str]) -> list[Request]:
+        if compiled.expect is None:
             return []
-        frames, out = case.get("frames", {}), []
+        frames, out = compiled.frames, []
         for check in case["checks"]:
             if check == "roundtrip":
-                out += [self._request(case, f"roundtrip-{e}", "roundtrip", e)
+                out += [self._request(case, compiled, f"roundtrip-{e}", "roundtrip", e)
                         for e in self.codec.encodings if e in emits and e in frames]
             elif check == "describe":
-                out.append(Request("describe", "describe", params=self.codec.params(case, "describe", None)))
+                out.append(Request("describe", "describe", params=self.codec.params(case, "describe", None),
+                                   context=compiled))
             else:
                 op, encoding = check.split("-", 1)
                 if op != "encode" or encoding in emits:
-                    out.append(self._request(case, check, op, encoding))
+                    out.append(self._request(case, compiled, check, op, encoding))
         return out
 
-    def _request(self, case: dict, check: str, op: str, encoding: str) -> Request:
+    def _request(self, case: dict, compiled: _Compiled, check: str, op: str, encoding: str) -> Request:
+        params = self.codec.params(case, op, encoding)
         if op == "encode":
-            return Request(check, op, encoding, message=case["message"], params=self.codec.params(case, op, encoding))
-        return Request(check, op, encoding, frame=case["frames"][encoding], params=self.codec.params(case, op, encoding))
+            return Request(check, op, encoding, message=case["message"], params=params, context=compiled)
+        return Request(check, op, encoding, frame=compiled.frames[encoding], params=params, context=compiled)
 
     # ------------------------------------------------------------ judging
 
     def judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult:
-        result = self._judge(case, edition, request, answer)
+        compiled = request.context if request.context is not None else self.compiled(case, edition)
+        if answer.kind == "ok" and compiled.expect == "valid" and not answer.note:  # the common case, at once
+            op = request.op
+            if op == "decode":
+                if compiled.canonical is not None and orjson.dumps(answer.message) == compiled.canonical:
+                    return self._pass(request.check, "decoded as expected")
+            elif op != "describe" and answer.frame == compiled.frames.get(request.encoding):
+                return self._pass(request.check, "frame matches" if op == "encode" else "re-encoded to the same frame")
+        result = self._judge(case, compiled, edition, request, answer)
         if answer.note:
             result.note = answer.note
         return result
 
-    def _judge(self, case: dict, edition: str, request: Request, answer: Answer) -> CheckResult:
+    def _pass(self, check: str, detail: str) -> CheckResult:
+        """The PASS of a check (its name says its operation, and so its detail)."""
+        found = self._passes.get(check)
+        if found is None:
+            found = self._passes[check] = CheckResult(check, Verdict.PASS, detail)
+        return found
+
+    def _judge(self, case: dict, compiled: _Compiled, edition: str, request: Request, answer: Answer) -> CheckResult:
         if answer.kind in FAILURE_KINDS:
             return CheckResult(request.check, FAILURE_KINDS[answer.kind], answer.reason)
         if answer.kind == "rejected" and answer.rule is not None and answer.rule not in self.codec.rules:
@@ -111,12 +167,11 @@ class VectorKind:
                                f"which the suite's rules do not have: {answer.reason}")
         if request.op == "describe":
             return self._describe(case, edition, request, answer)
-        expect = expectation(case, edition)
-        if expect == "valid":
-            return self._valid(case, edition, request, answer)
-        if expect == "invalid":
+        if compiled.expect == "valid":
+            return self._valid(case, compiled, edition, request, answer)
+        if compiled.expect == "invalid":
             return self._invalid(case, request, answer)
-        return self._acceptable(case, edition, request, answer)
+        return self._acceptable(case, compiled, edition, request, answer)
 
     def _describe(self, case, edition, request, answer) -> CheckResult:
         if answer.kind == "rejected":
@@ -128,7 +183,7 @@ class VectorKind:
             return CheckResult(request.check, Verdict.FAIL, "; ".join(diffs[:3]))
         return CheckResult(request.check, Verdict.PASS, "described as expected")
 
-    def _decoded_wrongly(self, case, edition, request, answer, detail_prefix: str) -> CheckResult | None:
+    def _decoded_wrongly(self, case, compiled, edition, request, answer, detail_prefix: str) -> CheckResult | None:
         """None if the decoded message is the expected one; else an ADAPTER_ERROR (malformed answer) or FAIL."""
         diffs = self.codec.differences(case["message"], answer.message,
                                        case.get("compare", {}).get("nan_payload", False), edition)
@@ -137,18 +192,18 @@ class VectorKind:
         malformed = self.codec.malformed(answer.message, case, edition)
         if malformed:
             return CheckResult(request.check, Verdict.ADAPTER_ERROR, malformed)
-        expected = bytes.fromhex(case["frames"][request.encoding])
+        expected = compiled.frames[request.encoding]
         return self.failure(case, edition, request, detail_prefix + "; ".join(str(d) for d in diffs[:5]), expected,
                             self.reencoded(answer.message, request.encoding, edition))
 
-    def _valid(self, case, edition, request, answer) -> CheckResult:
+    def _valid(self, case, compiled, edition, request, answer) -> CheckResult:
         check = request.check
         if answer.kind == "rejected":
             return CheckResult(check, Verdict.FAIL, f"refused a valid {request.op}: {answer.reason}")
         if request.op == "decode":
-            return (self._decoded_wrongly(case, edition, request, answer, "")
+            return (self._decoded_wrongly(case, compiled, edition, request, answer, "")
                     or CheckResult(check, Verdict.PASS, "decoded as expected"))
-        expected = bytes.fromhex(case["frames"][request.encoding])
+        expected = compiled.frames[request.encoding]
         if answer.frame != expected:
             return self.failure(case, edition, request, "", expected, answer.frame, locate=True)
         return CheckResult(check, Verdict.PASS, "frame matches" if request.op == "encode" else "re-encoded to the same frame")
@@ -162,7 +217,7 @@ class VectorKind:
             return CheckResult(check, Verdict.NON_STRICT, f"rejected, but named rule {answer.rule!r} instead of {rule!r}: {answer.reason}")
         return CheckResult(check, Verdict.PASS, f"rejected: {answer.reason}")
 
-    def _acceptable(self, case, edition, request, answer) -> CheckResult:
+    def _acceptable(self, case, compiled, edition, request, answer) -> CheckResult:
         check = request.check
         permitted = {o["outcome"]: o for o in case["outcomes"]}
         if answer.kind == "rejected":
@@ -178,7 +233,7 @@ class VectorKind:
                 if name != "reject" and not self.codec.differences(outcome.get("message", case["message"]),
                                                                   answer.message, nan_payload, edition):
                     return CheckResult(check, Verdict.IMPL_DEFINED, "accepted" if name == "accept" else name, name)
-            return self._decoded_wrongly(case, edition, request, answer, "accepted, but decoded wrongly: ") or \
+            return self._decoded_wrongly(case, compiled, edition, request, answer, "accepted, but decoded wrongly: ") or \
                 CheckResult(check, Verdict.FAIL, "accepted, which this case does not permit")
         frames = {name: o.get("frames", case.get("frames")) for name, o in permitted.items() if name != "reject"}
         for name, candidate in frames.items():

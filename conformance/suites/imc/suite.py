@@ -8,9 +8,6 @@ from functools import cached_property
 from pathlib import Path
 
 from ...core.suite import BuiltinAdapter, Group
-from ...kinds.robustness import RobustnessKind
-from ...kinds.scenario import ScenarioKind
-from ...kinds.vector import VectorKind
 from ...paths import VECTORS
 from . import codec
 from .compare import Comparator
@@ -18,7 +15,6 @@ from .decoded_form import message_problem
 from .definitions import Definitions, load_definitions, parse_definitions
 from ..data_suite import DataSuite, read_data_file
 from .paths import IMC
-from .wire import ImcWire
 
 ADAPTERS_PACKAGE = "imc_conformance.adapters"
 
@@ -75,12 +71,18 @@ class ImcSuite(DataSuite):
 
     @cached_property
     def kinds(self) -> dict:
+        from ...kinds.robustness import RobustnessKind  # the case kinds are imported when a run plans cases
+        from ...kinds.scenario import ScenarioKind
+        from ...kinds.vector import VectorKind
+
         return {"vector": VectorKind(ImcCodec(self.defs, frozenset(r["id"] for r in self.rules))),
                 "scenario": ScenarioKind(self.wire, self.behaviour),
                 "robustness": RobustnessKind(self.wire, self.behaviour)}
 
     @cached_property
-    def wire(self) -> ImcWire:
+    def wire(self):
+        from .wire import ImcWire
+
         return ImcWire(self.defs, {r["id"]: r["clause"] for r in self.rules})
 
     @property

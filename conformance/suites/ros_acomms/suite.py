@@ -7,15 +7,12 @@ from functools import cached_property
 from pathlib import Path
 
 from ...core.suite import BuiltinAdapter, Group
-from ...kinds.scenario import ScenarioKind
-from ...kinds.vector import VectorKind
 from ...paths import VECTORS
 from . import codec, forms
 from .definitions import DefinitionError, RosDefinitions, load_definitions, parse_definitions
 from .msgtext import expected_types, parse_full_text, text_differences
 from ..data_suite import DataSuite, read_data_file
 from .paths import ROS
-from .wire import RosWire
 
 ADAPTERS_PACKAGE = "imc_conformance.adapters"
 
@@ -86,11 +83,16 @@ class RosSuite(DataSuite):
 
     @cached_property
     def kinds(self) -> dict:
+        from ...kinds.scenario import ScenarioKind  # the case kinds are imported when a run plans cases
+        from ...kinds.vector import VectorKind
+
         return {"vector": VectorKind(RosCodec(self.defs, frozenset(r["id"] for r in self.rules))),
                 "scenario": ScenarioKind(self.wire, self.behaviour)}
 
     @cached_property
-    def wire(self) -> RosWire:
+    def wire(self):
+        from .wire import RosWire
+
         return RosWire(self.defs)
 
     @property

@@ -13,6 +13,7 @@ import sys
 
 from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
 from ..definitions import Definitions, lint_definitions, load_definitions
+from ... import load_suite
 from ...data_suite import write_generated
 from ..paths import imc_data
 from .acceptable import add_acceptable
@@ -63,12 +64,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="imc-conformance generate", description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="report files that differ from a fresh build; write nothing")
     args = parser.parse_args(argv)
-    root = imc_data()
     defs = load_definitions()
     for problem in lint_definitions(defs):  # reported, never "fixed": such values become acceptable encode cases
         print(f"definitions: {problem}")
     files = build_corpus(defs)
-    return write_generated(root, files, args.check, "vectors/imc")
+    return write_generated(load_suite("imc"), files, args.check, "vectors/imc")
 
 
 if __name__ == "__main__":

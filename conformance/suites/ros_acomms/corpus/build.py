@@ -20,6 +20,7 @@ from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown,
 from .. import codec
 from ..definitions import Edition, FieldType, Message, RosDefinitions, TypeDef, load_definitions
 from ..msgtext import full_text, md5, service_md5
+from ... import load_suite
 from ...data_suite import write_generated
 from ..paths import ros_data
 from . import values
@@ -336,9 +337,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="imc-conformance generate --suite ros_acomms", description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="report files that differ from a fresh build; write nothing")
     args = parser.parse_args(argv)
-    root = ros_data()
     files = build_corpus(load_definitions())
-    return write_generated(root, files, args.check, "vectors/ros_acomms")
+    return write_generated(load_suite("ros_acomms"), files, args.check, "vectors/ros_acomms")
 
 
 if __name__ == "__main__":
