@@ -1,7 +1,8 @@
 """The JSON-lines protocol loop shared by the subprocess shims (standard library only).
 
 A shim provides an object with ``hello()``, ``encode(suite, message, byte_order) -> bytes`` and
-``decode(suite, frame) -> dict``, raising ``Refused`` or ``Unsupported``; ``serve`` does the rest.
+``decode(suite, frame) -> dict``, raising ``Refused`` or ``Unsupported``; ``serve`` does the rest, batches
+included (its hello says ``"batch": true``: a line may hold an array of requests, answered by an array).
 It imports nothing from imc_conformance, so the shims stay independent of the suite's own code.
 """
 
@@ -59,7 +60,7 @@ def float_value(x: float, width: int):
 def perform(shim, request: dict) -> dict:
     op = request.get("op")
     if op == "hello":
-        return shim.hello()
+        return {**shim.hello(), "batch": True}
     if op == "encode":
         return {"frame": shim.encode(request.get("suite"), request.get("message"), request.get("byte_order")).hex()}
     if op == "decode":
@@ -68,10 +69,21 @@ def perform(shim, request: dict) -> dict:
 
 
 def respond(shim, line: bytes) -> str:
-    """The answer line to one request line; a failure of the shim itself is ``internal``."""
-    ident = None
+    """The answer line to one request line (one request, or a batch: a JSON array of requests, answered with an
+    array of answers); a failure of the shim itself is ``internal``."""
     try:
         request = json.loads(line)
+    except ValueError as exc:
+        return json.dumps({"id": None, "ok": False, "internal": True, "error": f"not JSON: {exc}"})
+    if isinstance(request, list):
+        return "[" + ",".join(answer(shim, r) for r in request) + "]"
+    return answer(shim, request)
+
+
+def answer(shim, request) -> str:
+    """The answer to one request, as JSON text."""
+    ident = None
+    try:
         ident = request["id"]
         reply = {"id": ident, "ok": True, **perform(shim, request)}
     except Refused as exc:

@@ -48,6 +48,8 @@ def hello() -> dict:
         reply["byte_orders"] = []
     elif MODE == "wrong-suite":
         reply["suites"] = ["ros_acomms"]
+    if MODE.startswith("batched"):
+        reply["batch"] = True
     return reply
 
 
@@ -149,6 +151,26 @@ def serve_in_order() -> None:
         sys.stdout.flush()
 
 
+def serve_batched() -> None:
+    """Batches (arrays of requests) taken as the hello offers: answered by an array in reverse order
+    (``batched``), one line per request (``batched-lines``), or by an array whose answer to the trigger frame
+    is malformed (``batched-bad``)."""
+    for line in sys.stdin:
+        request = json.loads(line)
+        requests = request if isinstance(request, list) else [request]
+        replies = []
+        for r in requests:
+            reply = answer(r)
+            if MODE == "batched-bad" and r.get("op") == "decode" and r.get("frame") == TRIGGER:
+                reply = {"id": r["id"], "ok": True}
+            replies.append(reply)
+        if MODE == "batched-lines" or not isinstance(request, list):
+            sys.stdout.writelines(json.dumps(reply) + "\n" for reply in replies)
+        else:
+            sys.stdout.write(json.dumps(replies[::-1]) + "\n")
+        sys.stdout.flush()
+
+
 def serve_reversed() -> None:
     """Correct answers, each burst of requests answered in reverse order."""
     pending, buffer = [], b""
@@ -202,6 +224,8 @@ def main() -> None:
         sys.stderr.write(EVIL + "\n")
     if MODE == "reversed":
         serve_reversed()
+    elif MODE.startswith("batched"):
+        serve_batched()
     else:
         serve_in_order()
 

@@ -132,6 +132,21 @@ def test_answers_in_any_order_are_matched_by_id(reference):
         assert verdicts(s, SELECTION) == reference
 
 
+@pytest.mark.parametrize("mode", ["batched", "batched-lines"])
+def test_a_program_that_takes_batches_answers_as_one_per_line(reference, mode):
+    """The batched protocol: several requests a line; answers as an array (in any order) or a line each."""
+    with session(program(mode)) as batched:
+        assert batched.hello()["batch"] is True
+        assert verdicts(batched, SELECTION) == reference
+
+
+def test_a_malformed_answer_in_a_batch_is_the_adapter_s_error_on_its_case(reference):
+    with session(program("batched-bad")) as batched:
+        got = verdicts(batched, SELECTION)
+        assert got[TRIGGER] == Verdict.ADAPTER_ERROR
+        assert {k: v for k, v in got.items() if k != TRIGGER} == {k: v for k, v in reference.items() if k != TRIGGER}
+
+
 def test_a_program_that_keeps_crashing_cannot_hang_the_run():
     cases = SELECTION[:40]
     with session(program("always-crashes"), timeout=2) as s:
@@ -270,7 +285,7 @@ def test_the_imcpy_shim_gives_the_imcpy_adapters_verdicts():
     from imc_conformance.adapters.imcpy_adapter import adapter
     library = LibrarySession(adapter(), "imcpy")
     with session([sys.executable, str(ROOT / "adapters" / "imcpy_shim.py")]) as shim:
-        assert shim.hello() == library.hello()
+        assert shim.hello() == {**library.hello(), "batch": True}  # the shim takes batched requests
         assert_same_verdicts(library, shim)
 
 
@@ -281,6 +296,6 @@ def test_the_pyimclsts_shim_gives_the_pyimclsts_adapters_verdicts(tmp_path):
     argv = [sys.executable, str(ROOT / "adapters" / "pyimclsts_shim.py"),
             "--imc-xml", str(fetch_imc_xml()), "--cache", str(tmp_path)]
     with session(argv, hello_timeout=300) as shim:  # the first hello generates pyimclsts's classes
-        assert shim.hello() == library.hello()
+        assert shim.hello() == {**library.hello(), "batch": True}
         assert_same_verdicts(library, shim)
     assert (tmp_path / f"pyimclsts-{pyimclsts_adapter.VERSION}" / "generation.json").exists()

@@ -147,6 +147,7 @@ class RunResult:
         return 0
 
     def to_dict(self) -> dict:
+        memo: dict = {}
         return {
             "format": FORMAT, "suite": self.suite, "title": self.title, "edition": self.edition,
             "implementation": self.implementation, "adapter": self.adapter, "strict": self.strict,
@@ -155,7 +156,7 @@ class RunResult:
             "incidents": [asdict(i) for i in self.incidents], "stderr": self.stderr,
             "messages": [{"name": m.name, "key": m.key, "verdict": m.verdict,
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
-                          "cases": [case_dict(c) for c in m.cases]} for m in self.messages],
+                          "cases": [case_dict(c, memo) for c in m.cases]} for m in self.messages],
         }
 
     @classmethod
@@ -197,7 +198,9 @@ def message_verdict(cases: list[CaseResult], strict: bool) -> str:
     return "PASS"
 
 
-def case_dict(c: CaseResult) -> dict:
+def case_dict(c: CaseResult, memo: dict | None = None) -> dict:
+    """A case as its JSON form; ``memo`` keeps the form of each check object already written (checks are shared
+    between cases where they are equal, e.g. a PASS)."""
     out = {"id": c.id, "verdict": c.verdict.value, "detail": c.detail, "expect": c.expect, "clause": c.clause}
     if c.rule:
         out["rule"] = c.rule
@@ -207,12 +210,29 @@ def case_dict(c: CaseResult) -> dict:
         out["waiver"] = c.waiver
     if c.timeline:
         out["timeline"] = c.timeline
-    out["checks"] = []
+    memo = {} if memo is None else memo
+    checks = out["checks"] = []
     for k in c.checks:
-        check = {key: list(value) if key == "diffs" else value for key, value in asdict(k).items()
-                 if value not in (None, ()) and key != "filed_under"}
-        check["verdict"] = k.verdict.value
-        out["checks"].append(check)
+        check = memo.get(id(k))
+        if check is None:
+            check = memo[id(k)] = check_dict(k), k  # the object kept alive, so that its id is not reused
+        checks.append(check[0])
+    return out
+
+
+def check_dict(k: CheckResult) -> dict:
+    """A check as its JSON form: every field that is set, in the model's order (but where it is filed)."""
+    out = {"check": k.check, "verdict": k.verdict.value, "detail": k.detail}
+    for key in ("outcome", "expected", "actual"):
+        value = getattr(k, key)
+        if value is not None:
+            out[key] = value
+    if k.diffs:
+        out["diffs"] = [{"start": d.start, "end": d.end, "field": d.field} for d in k.diffs]
+    for key in ("note", "clause"):
+        value = getattr(k, key)
+        if value is not None:
+            out[key] = value
     return out
 
 

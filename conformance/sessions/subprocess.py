@@ -15,6 +15,11 @@ its stdin; the program answers each with one line on its stdout, matched by ``id
   and ``{"op": "publish", "type": ..., "message": {...}}`` -> ``{"ok": true}``; ``{"op": "call", "service":
   ..., "request": {...}}`` -> ``{"ok": true, "response": {...}}``.
 
+Batched: a program whose hello answer says ``"batch": true`` is sent several requests in one line, as a
+JSON array of request objects (up to ``BATCH``), and may answer with one line per request or with a line
+holding an array of answers (each answer has its ``id``, as always). Either way every request gets exactly one
+answer. A program without ``batch`` gets one request per line.
+
 A refusal is ``{"id": N, "ok": false, "error": "invalid CRC", "rule": "crc"}`` (``rule`` optional).
 ``"unsupported": true`` declares the capability absent. ``"ok": false, "internal": true`` says the
 adapter itself failed (a bug in the shim, not a refusal by the implementation): an adapter error.
@@ -40,6 +45,8 @@ from __future__ import annotations
 
 import json
 import os
+
+import orjson
 import queue
 import resource
 import signal
@@ -58,6 +65,7 @@ from ..core.session import AdapterStartError, Answer, Job
 STDERR_KEEP = 64 * 1024
 MAX_RESTARTS = 20
 SNIPPET = 200
+BATCH = 64  # requests per line for a program that takes batches
 EXIT_DRAIN = 1.0  # seconds to read what a program wrote before it exited, once its group is killed
 
 
@@ -151,8 +159,13 @@ class _Process:
             self.exited_at = time.monotonic()
             self.kill_group()
 
-    def send(self, request: dict) -> None:
-        self._outbox.put(json.dumps(request, separators=(",", ":")).encode() + b"\n")
+    def send(self, request) -> None:
+        """Write one request object, or a batch (a list of them), as one line."""
+        try:
+            line = orjson.dumps(request, option=orjson.OPT_APPEND_NEWLINE)
+        except orjson.JSONEncodeError:  # text orjson will not write (a lone surrogate an adapter answered): escaped
+            line = json.dumps(request, separators=(",", ":")).encode() + b"\n"
+        self._outbox.put(line)
 
     def next_event(self, timeout: float):
         """The next event, or None if there was none within ``timeout`` seconds."""
@@ -403,16 +416,24 @@ class SubprocessSession:
     def _send_what_fits(self, state: _RunState) -> None:
         if state.replay:
             if not state.inflight:
-                self._send(state, state.replay.popleft())
+                self._proc.send(self._sent(state, state.replay.popleft()))
             return
+        batched = self._info.get("batch") is True
+        batch = []
         while len(state.inflight) < self.pipeline and (call := state.next_call()) is not None:
-            self._send(state, call)
+            batch.append(self._sent(state, call))
+            if not batched or len(batch) == BATCH:
+                self._proc.send(batch if batched else batch[0])
+                batch = []
+        if batch:
+            self._proc.send(batch)
 
-    def _send(self, state: _RunState, call: _Call) -> None:
+    def _sent(self, state: _RunState, call: _Call) -> dict:
+        """The request object of a call, now in flight."""
         ident = next(self._ids)
         call.sent = time.monotonic()
         state.inflight[ident] = call
-        self._proc.send({"id": ident, **call.body})
+        return {"id": ident, **call.body}
 
     def _receive(self, state: _RunState) -> Iterator[tuple[Job, Answer]]:
         """Handle the next event of the program; raises _Restart when the program must be restarted."""
@@ -444,15 +465,17 @@ class SubprocessSession:
         except ValueError:
             raise self._unattributed(state, "adapter-error",
                                      f"adapter wrote a line that is not JSON: {_snippet(raw)}") from None
-        ident = reply.get("id") if isinstance(reply, dict) else None
-        call = state.inflight.pop(ident, None) if isinstance(ident, int) and not isinstance(ident, bool) else None
-        if call is None:
-            what = "not a JSON object" if not isinstance(reply, dict) else "an answer to no request in flight"
-            raise self._unattributed(state, "adapter-error", f"adapter wrote {what}: {_snippet(raw)}")
-        state.answered()
-        answer = _answer(call.body["op"], reply)
-        answer.note = call.note
-        yield from state.finish(call, answer)
+        replies = reply if isinstance(reply, list) and reply and self._info.get("batch") is True else [reply]
+        for reply in replies:
+            ident = reply.get("id") if isinstance(reply, dict) else None
+            call = state.inflight.pop(ident, None) if isinstance(ident, int) and not isinstance(ident, bool) else None
+            if call is None:
+                what = "not a JSON object" if not isinstance(reply, dict) else "an answer to no request in flight"
+                raise self._unattributed(state, "adapter-error", f"adapter wrote {what}: {_snippet(raw)}")
+            state.answered()
+            answer = _answer(call.body["op"], reply)
+            answer.note = call.note
+            yield from state.finish(call, answer)
 
     @staticmethod
     def _unattributed(state: _RunState, kind: str, reason: str) -> _Restart:
