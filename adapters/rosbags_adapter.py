@@ -4,7 +4,8 @@ The typestore (``Stores.ROS1_NOETIC``, whose std_msgs/Header has ``seq``) is bui
 default the suite's own text of an edition (``--adapter-arg edition=9.0.0``), or a team's own package
 (``--adapter-arg msgs=path/to/ros_acomms_msgs``, its ``msg/*.msg`` and ``srv/*.srv``), so that a team
 checks *their* definitions. Messages move between the decoded form and rosbags objects by rosbags' own
-field definitions: a field the implementation's definition names differently shows as a difference.
+field definitions, through converters built once per type (a function per field, each way): a field the
+implementation's definition names differently shows as a difference.
 Service halves are registered as ``<pkg>/msg/<Service>Request``/``Response`` (rosbags resolves relative
 names against ``<pkg>/msg``). A type the typestore lacks is refused (``unknown-type``).
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import struct
 from importlib.metadata import version
+from math import isfinite
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +59,8 @@ class RosbagsAdapter:
                 raise ValueError(f"{name.replace('/msg/', '/')}: {exc}") from None
         self.store.register(types)
         self.source = f"{msgs} .msg files" if msgs else f"the suite's {edition or 'seed'} edition"
+        self._builders: dict[str, tuple] = {}  # type -> (field names, [(name, convert in)], class)
+        self._readers: dict[str, list] = {}  # type -> [(name, convert out)]
 
     def hello(self) -> dict:
         return {"implementation": f"rosbags {version('rosbags')} (typestore from {self.source})", "suites": [SUITE],
@@ -87,36 +91,53 @@ class RosbagsAdapter:
     def _build(self, typename: str, fields):
         if not isinstance(fields, dict):
             raise Rejected(f"{typename}: fields must be an object", rule="value-type")
-        defs = self.store.fielddefs[typename][1]
-        unknown = sorted(set(fields) - {name for name, _ in defs})
-        if unknown:
-            raise Rejected(f"{typename} has no field {unknown[0]!r}", rule="unknown-field")
+        builder = self._builders.get(typename)
+        if builder is None:
+            defs = self.store.fielddefs[typename][1]
+            builder = self._builders[typename] = ({name for name, _ in defs},
+                                                  [(name, self._to(desc)) for name, desc in defs],
+                                                  self.store.types[typename])
+        names, converters, cls = builder
+        if len(fields) != len(names) or not names.issuperset(fields):
+            unknown = sorted(set(fields) - names)
+            if unknown:
+                raise Rejected(f"{typename} has no field {unknown[0]!r}", rule="unknown-field")
         values = {}
-        for name, desc in defs:
+        for name, convert in converters:
             if name not in fields:
                 raise Rejected(f"{typename}.{name} is missing", rule="missing-field")
-            values[name] = self._to(desc, fields[name], f"{typename}.{name}")
-        return self.store.types[typename](**values)
+            try:
+                values[name] = convert(fields[name])
+            except (ValueError, TypeError, KeyError) as exc:
+                raise Rejected(f"{typename}.{name}: {exc}", rule="value-type") from exc
+        return cls(**values)
 
-    def _to(self, desc, value, where: str):
+    def _to(self, desc):
+        """The function turning a decoded value of a field of ``desc`` into what rosbags takes."""
         kind, detail = desc
-        try:
-            if kind == Nodetype.BASE:
-                return _scalar(detail[0], value)
-            if kind == Nodetype.NAME:
-                if detail in TIMES:
-                    return self.store.types[detail](sec=value["secs"], nanosec=value["nsecs"])
-                return self._build(detail, value)
-            element, _ = detail  # an ARRAY (fixed length) or SEQUENCE: rosbags wants numpy for primitives
-            if element[0] == Nodetype.BASE and element[1][0] in DTYPES:
-                return _primitive_array(element[1][0], value)
+        if kind == Nodetype.BASE:
+            base = detail[0]
+            if base in FLOATS:  # a plain number goes as it is; strings (NaN by bits, infinities) are converted
+                return lambda value: value if type(value) is float else _scalar(base, value)
+            if base not in ("bool", "string"):
+                return lambda value: value if type(value) is int else _scalar(base, value)
+            return lambda value: _scalar(base, value)
+        if kind == Nodetype.NAME:
+            if detail in TIMES:
+                cls = self.store.types[detail]
+                return lambda value: cls(sec=value["secs"], nanosec=value["nsecs"])
+            return lambda value: self._build(detail, value)
+        element, _ = detail  # an ARRAY (fixed length) or SEQUENCE: rosbags wants numpy for primitives
+        if element[0] == Nodetype.BASE and element[1][0] in DTYPES:
+            base = element[1][0]
+            return lambda value: _primitive_array(base, value)
+        convert = self._to(element)
+
+        def array(value):
             if not isinstance(value, list):
-                raise Rejected(f"{where}: an array must be a list", rule="value-type")
-            return [self._to(element, v, f"{where}[]") for v in value]
-        except Rejected:
-            raise
-        except (ValueError, TypeError, KeyError) as exc:
-            raise Rejected(f"{where}: {exc}", rule="value-type") from exc
+                raise Rejected("an array must be a list", rule="value-type")
+            return [convert(v) for v in value]
+        return array
 
     # -------------------------------------------------------- decoding
 
@@ -130,24 +151,35 @@ class RosbagsAdapter:
         return {"type": type, "fields": self._fields(typename, obj)}
 
     def _fields(self, typename: str, obj) -> dict:
-        return {name: self._from(desc, getattr(obj, name)) for name, desc in self.store.fielddefs[typename][1]}
+        reader = self._readers.get(typename)
+        if reader is None:
+            reader = self._readers[typename] = [(name, self._from(desc)) for name, desc in self.store.fielddefs[typename][1]]
+        return {name: convert(getattr(obj, name)) for name, convert in reader}
 
-    def _from(self, desc, value):
+    def _from(self, desc):
+        """The function turning a rosbags value of a field of ``desc`` into its decoded form."""
         kind, detail = desc
         if kind == Nodetype.BASE:
             base = detail[0]
-            if base in FLOATS:
-                return float_from_bits(int.from_bytes(struct.pack("<" + ("f" if base == "float32" else "d"), value),
-                                                      "little"), FLOATS[base])
-            return bool(value) if base == "bool" else value if base == "string" else int_form(int(value))
+            if base in FLOATS:  # finite values as they are (exact at the width); NaN and infinities by their bits
+                width, pack = FLOATS[base], struct.Struct("<f" if base == "float32" else "<d").pack
+                return lambda value: float(value) if isfinite(value) else float_from_bits(
+                    int.from_bytes(pack(value), "little"), width)
+            if base == "bool":
+                return bool
+            if base == "string":
+                return lambda value: value
+            return lambda value: int_form(int(value))
         if kind == Nodetype.NAME:
             if detail in TIMES:
-                return {"secs": int(value.sec), "nsecs": int(value.nanosec)}
-            return self._fields(detail, value)
+                return lambda value: {"secs": int(value.sec), "nsecs": int(value.nanosec)}
+            return lambda value: self._fields(detail, value)
         element, _ = detail
         if element[0] == Nodetype.BASE and element[1][0] in DTYPES:
-            return _from_primitive_array(element[1][0], value)
-        return [self._from(element, v) for v in value]
+            base = element[1][0]
+            return lambda value: _from_primitive_array(base, value)
+        convert = self._from(element)
+        return lambda value: [convert(v) for v in value]
 
     # -------------------------------------------------------- definitions
 

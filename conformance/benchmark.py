@@ -68,7 +68,7 @@ def imcpy_alone(suite, cases, emits: set[str]) -> float:
     for case in cases:
         for request in suite.kinds[case.kind].plan(case.data, EDITION, emits):
             if request.op in ("decode", "roundtrip"):
-                frames.append(bytes.fromhex(request.frame))
+                frames.append(request.frame)
             if request.op in ("encode", "roundtrip") and case.data["expect"] == "valid":
                 encodable.append(case.data["frames"]["le"])
     messages = [imcpy.Packet.deserialize(bytes.fromhex(f)) for f in encodable]
@@ -90,7 +90,7 @@ def rosbags_alone(adapter, suite, cases) -> float:
     for case in cases:
         for request in suite.kinds[case.kind].plan(case.data, ROS_EDITION, {"ros1"}):
             if request.op == "decode":
-                work.append((bytes.fromhex(request.frame), adapter._typename(case.data["type"])))
+                work.append((request.frame, adapter._typename(case.data["type"])))
     start = time.perf_counter()
     store = adapter.store
     for frame, typename in work:
