@@ -129,8 +129,10 @@ def test_json_validates_and_round_trips(which, request):
 
 
 def _older(doc: dict, version: int) -> dict:
-    """``doc`` as formats 1 and 2 wrote it: IMC only, numeric message ids, no title (format 1: no completeness,
-    incidents or check kinds)."""
+    """``doc`` as formats 1 to 3 wrote it: before shards; formats 1 and 2: IMC only, numeric message ids, no title
+    (format 1: no completeness, incidents or check kinds)."""
+    if version == 3:
+        return {k: v for k, v in doc.items() if k != "shard"} | {"format": "imc-conformance-result/3"}
     old = {k: v for k, v in doc.items() if k != "title"}
     old["format"] = f"imc-conformance-result/{version}"
     old["messages"] = [{**{k: v for k, v in m.items() if k != "key"}, "id": int(m["key"])} for m in doc["messages"]]
@@ -140,7 +142,7 @@ def _older(doc: dict, version: int) -> dict:
     return old
 
 
-@pytest.mark.parametrize("version", [1, 2])
+@pytest.mark.parametrize("version", [1, 2, 3])
 def test_report_reads_the_older_formats(version, imcpy_result, tmp_path):
     from imc_conformance.files import read_result
 

@@ -56,3 +56,53 @@ def test_the_command_line_imports_nothing_heavy_to_start():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+# ---------------------------------------------------------------- shards
+
+def test_shards_partition_the_selection_by_case_id():
+    from imc_conformance.core.cases import select_cases, shard_of
+
+    _, cases = open_corpus("imc")
+    shards = [select_cases(cases, "imc-5.4.30", shard=(k, 4)) for k in range(1, 5)]
+    ids = [c.id for shard in shards for c in shard]
+    assert sorted(ids) == sorted(c.id for c in select_cases(cases, "imc-5.4.30")) and len(ids) == len(set(ids))
+    assert all(shard_of(c.id, 4) == k for k, shard in enumerate(shards, 1) for c in shard)
+
+
+def test_merged_shards_are_the_whole_run(tmp_path, capsys):
+    from imc_conformance.cli import main
+
+    whole = tmp_path / "whole.json"
+    assert main(["run", "--adapter", "imcpy", "--no-progress", "--message", "LblRange", "--message", "AcousticStatus",
+                 "--json", str(whole)]) == 1
+    parts = [tmp_path / f"shard{k}.json" for k in (1, 2, 3)]
+    for k, part in enumerate(parts, 1):
+        main(["run", "--adapter", "imcpy", "--no-progress", "--message", "LblRange", "--message", "AcousticStatus",
+              "--shard", f"{k}/3", "--json", str(part)])
+    merged = tmp_path / "merged.json"
+    assert main(["report", "--merge", *map(str, reversed(parts)), "--json", str(merged)]) == 1
+
+    def cases(path):
+        doc = json.loads(path.read_text())
+        return [(m["name"], c["id"], c["verdict"], c["checks"]) for m in doc["messages"] for c in m["cases"]]
+    assert cases(merged) == cases(whole)
+    capsys.readouterr()
+    assert main(["report", "--merge", str(parts[0]), str(parts[1])]) == 2
+    assert "shard 3/3 missing" in capsys.readouterr().err
+    assert main(["report", "--merge", str(parts[0]), str(parts[0]), str(parts[2])]) == 2
+    assert "not each of one run of 3" in capsys.readouterr().err
+    assert main(["report", "--merge", str(whole), str(parts[0])]) == 2
+    assert "is not a shard" in capsys.readouterr().err
+
+
+def test_the_pytest_plugin_gives_the_same_outcomes_under_xdist(tmp_path):
+    pytest.importorskip("xdist")
+    outcomes = {}
+    for workers in ([], ["-n", "2"]):
+        done = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q", "-rA", *workers,
+                               "--conformance-adapter=imcpy", "--conformance-message", "TextMessage"],
+                              capture_output=True, text=True, timeout=300, cwd=tmp_path)
+        outcomes[bool(workers)] = sorted(line.split(" - ")[0] for line in done.stdout.splitlines()
+                                         if line.startswith(("PASSED ", "FAILED ", "SKIPPED ")))
+    assert outcomes[True] == outcomes[False] and any(o.startswith("FAILED") for o in outcomes[False])

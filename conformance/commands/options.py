@@ -75,6 +75,14 @@ def address(text: str) -> str | int:
     return value
 
 
+def shard(text: str) -> tuple[int, int]:
+    """K/N: the Kth of N shards (1 <= K <= N, N >= 2)."""
+    k, sep, n = text.partition("/")
+    if not sep or not k.isdigit() or not n.isdigit() or not 2 <= int(n) <= 10_000 or not 1 <= int(k) <= int(n):
+        raise argparse.ArgumentTypeError(f"{text!r}: give K/N, the Kth of N shards (e.g. 1/4)")
+    return int(k), int(n)
+
+
 def port(text: str) -> int:
     if not text.isdigit() or not 0 < int(text) < 65536:
         raise argparse.ArgumentTypeError(f"{text!r} is not a UDP port")
@@ -106,6 +114,9 @@ def add_selection(parser) -> None:
                         help="only this message or type (repeatable)")
     parser.add_argument("--id", action="append", default=[], metavar="GLOB", help="only case ids matching (repeatable)")
     parser.add_argument("--tag", action="append", default=[], help="only cases with this tag (repeatable), e.g. invalid")
+    parser.add_argument("--shard", type=shard, metavar="K/N",
+                        help="only the Kth of N shards of the selection (by each case id's hash: stable when cases "
+                             "are added); report --merge joins the N results")
     parser.add_argument("--vectors", type=Path, metavar="DIR",
                         help="a suite folder (like vectors/imc) or folder of case files to use instead of the packaged corpus")
 

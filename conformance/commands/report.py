@@ -9,8 +9,9 @@ from .options import add_reports
 
 
 def add(sub) -> None:
-    rep = sub.add_parser("report", help="re-render a saved JSON result")
-    rep.add_argument("result", help="a file written by run --json")
+    rep = sub.add_parser("report", help="re-render a saved JSON result, or merge the results of a run's shards")
+    rep.add_argument("result", nargs="+", help="a file written by run --json (with --merge: one per shard)")
+    rep.add_argument("--merge", action="store_true", help="join the results of every shard of one run (run --shard)")
     add_reports(rep)
     rep.set_defaults(func=command)
 
@@ -21,10 +22,28 @@ def command(args) -> int:
     from .output import report_targets, terminal, write_reports
 
     targets = report_targets(args)
-    try:
-        result = read_result(Path(args.result))
-    except ValueError as exc:  # not JSON, unreadable, or not a valid result
-        raise UsageError(f"cannot read the result {exc}") from exc
+    if len(args.result) > 1 and not args.merge:
+        raise UsageError("give one result to re-render, or --merge and the results of every shard of a run")
+    results = []
+    for path in args.result:
+        try:
+            results.append(read_result(Path(path)))
+        except ValueError as exc:  # not JSON, unreadable, or not a valid result
+            raise UsageError(f"cannot read the result {exc}") from exc
+    result = merged(results) if args.merge else results[0]
     console = terminal()
     print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
+
+
+def merged(results):
+    """The shards' results as one: in the suite's order of messages and of cases (what the whole run gives)."""
+    from ..core.shards import merge
+    from ..files import open_corpus
+
+    groups = frozenset(m.name for r in results for m in r.messages)
+    try:
+        suite, cases = open_corpus(results[0].suite, None, groups)
+        return merge(results, [g.name for g in suite.groups], {c.id: i for i, c in enumerate(cases)})
+    except (ValueError, LookupError) as exc:
+        raise UsageError(f"cannot merge: {exc}") from exc

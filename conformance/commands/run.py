@@ -75,7 +75,7 @@ def selection(args):
     unknown = set(args.message) - {g.name for g in suite.groups}
     if unknown:
         raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
-    return suite, everything, select_cases(everything, args.edition, args.message, args.id, args.tag)
+    return suite, everything, select_cases(everything, args.edition, args.message, args.id, args.tag, args.shard)
 
 
 def selected_groups(args) -> frozenset[str] | None:
@@ -150,6 +150,9 @@ def command(args) -> int:
         session.close()
         if recorder is not None:
             recorder.close(complete=result is not None and result.complete)
+    if args.shard:
+        result.shard = args.shard
+        result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's cases")
     print_result(result, console)
     problems = write_reports(result, targets, console)
     if recorder is not None and recorder.failed:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import fnmatch
+import hashlib
 from dataclasses import dataclass
 
 
@@ -23,10 +24,19 @@ def expectation(data: dict, edition: str) -> str | None:
     return expect if isinstance(expect, str) else expect.get(edition)
 
 
-def select_cases(cases: list[Case], edition: str, groups=(), globs=(), tags=()) -> list[Case]:
-    """The cases of ``edition``, narrowed to these groups, id globs and tags (each when given)."""
+def shard_of(case_id: str, shards: int) -> int:
+    """The shard (1 to ``shards``) a case belongs to: by its id alone (SHA-1), so that adding cases moves none."""
+    return int.from_bytes(hashlib.sha1(case_id.encode()).digest()[:8], "big") % shards + 1
+
+
+def select_cases(cases: list[Case], edition: str, groups=(), globs=(), tags=(),
+                 shard: tuple[int, int] | None = None) -> list[Case]:
+    """The cases of ``edition``, narrowed to these groups, id globs and tags (each when given), and to shard
+    ``(K, N)`` of them."""
     out = []
     for case in cases:
+        if shard is not None and shard_of(case.id, shard[1]) != shard[0]:
+            continue
         if expectation(case.data, edition) is None:
             continue
         if groups and case.group not in groups:

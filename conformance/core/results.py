@@ -14,9 +14,9 @@ from dataclasses import asdict, dataclass, field
 from .verdicts import UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
-VERSION = 3
+VERSION = 4
 FORMAT = f"{FORMAT_NAME}/{VERSION}"
-SCHEMAS = {1: "result-1.schema.json", 2: "result-2.schema.json", 3: "result.schema.json"}
+SCHEMAS = {1: "result-1.schema.json", 2: "result-2.schema.json", 3: "result-3.schema.json", 4: "result.schema.json"}
 INTERRUPTED = 130  # the exit code of a run stopped by Ctrl-C, as shells report SIGINT
 
 
@@ -121,6 +121,7 @@ class RunResult:
     complete: bool = True  # False when the run was interrupted: only the cases done so far are in it
     incidents: list[Incident] = field(default_factory=list)
     untested: list[str] = field(default_factory=list)  # check kinds the adapter's hello ruled out entirely
+    shard: tuple[int, int] | None = None  # (K, N) of a run of one shard of its selection (--shard K/N)
 
     @property
     def cases(self) -> list[CaseResult]:
@@ -157,7 +158,7 @@ class RunResult:
             "messages": [{"name": m.name, "key": m.key, "verdict": m.verdict,
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
                           "cases": [case_dict(c, memo) for c in m.cases]} for m in self.messages],
-        }
+        } | ({"shard": {"index": self.shard[0], "of": self.shard[1]}} if self.shard else {})
 
     @classmethod
     def from_dict(cls, doc: dict) -> RunResult:
@@ -166,7 +167,8 @@ class RunResult:
                     for m in doc["messages"]]
         return cls(doc["suite"], doc["title"], doc["edition"], doc["implementation"], doc["adapter"], doc["strict"],
                    doc["started"], doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
-                   [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []))
+                   [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []),
+                   (doc["shard"]["index"], doc["shard"]["of"]) if "shard" in doc else None)
 
 
 def format_version(doc) -> int:

@@ -12,7 +12,9 @@ Each case is compiled once per edition (``_Compiled``: its expectation, its fram
 the encodings an implementation emits, and the canonical bytes of its decoded message), so that a run spends
 its time on the implementation, not on re-reading the corpus's hex: a decoded answer whose canonical JSON is the
 expected one's is a PASS at once (``orjson`` writes ``-0.0``, ``1.0`` and ``true`` apart from ``0.0``, ``1`` and
-``1``, so equal bytes mean equal values of equal types); any other goes through the suite's comparison policy.
+``1``, and refuses subclasses of its types here, so equal bytes mean equal values of equal types; as it writes a
+NaN or an infinity as ``null``, the shortcut is not taken for a message holding a null); any other answer goes
+through the suite's comparison policy.
 """
 
 from __future__ import annotations
@@ -77,7 +79,7 @@ class _Compiled:
     case: dict  # kept: the cache is keyed by its identity
     expect: str | None
     frames: dict[str, bytes]
-    canonical: bytes | None  # orjson bytes of the expected decoded message
+    canonical: bytes | None  # orjson bytes of the expected decoded message (None: no shortcut for this case)
     plans: dict[frozenset, list[Request]] = field(default_factory=dict)  # by the encodings emitted
 
 
@@ -98,7 +100,7 @@ class VectorKind:
             message = case.get("message")
             found = self._compiled[key] = _Compiled(
                 case, expectation(case, edition), {e: bytes.fromhex(h) for e, h in case.get("frames", {}).items()},
-                orjson.dumps(message) if message is not None else None)
+                _canonical(message))
         return found
 
     # ------------------------------------------------------------ planning
@@ -143,7 +145,7 @@ class VectorKind:
         if answer.kind == "ok" and compiled.expect == "valid" and not answer.note:  # the common case, at once
             op = request.op
             if op == "decode":
-                if compiled.canonical is not None and orjson.dumps(answer.message) == compiled.canonical:
+                if compiled.canonical is not None and _canonical(answer.message) == compiled.canonical:
                     return self._pass(request.check, "decoded as expected")
             elif op != "describe" and answer.frame == compiled.frames.get(request.encoding):
                 return self._pass(request.check, "frame matches" if op == "encode" else "re-encoded to the same frame")
@@ -267,6 +269,19 @@ class VectorKind:
             return self.codec.encode(message, encoding, edition)
         except (ValueError, KeyError, TypeError, AttributeError):
             return None
+
+
+def _canonical(message) -> bytes | None:
+    """The exact JSON bytes of a decoded message, or None where they could stand for another value (a null,
+    which a NaN would also write) or cannot be written (a value of a subclass, an integer beyond 64 bits, a lone
+    surrogate)."""
+    if message is None:
+        return None
+    try:
+        out = orjson.dumps(message, option=orjson.OPT_PASSTHROUGH_SUBCLASS)
+    except TypeError:  # orjson.JSONEncodeError too
+        return None
+    return None if b"null" in out else out
 
 
 def byte_diffs(expected: bytes, actual: bytes | None, spans: list[Span]) -> tuple[ByteDiff, ...]:

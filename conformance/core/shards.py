@@ -1,0 +1,51 @@
+"""The shards of one selection (``run --shard K/N``, e.g. the jobs of a CI matrix) joined into the result the
+whole selection would have given: every shard of the same run settings, each once, no case twice."""
+
+from __future__ import annotations
+
+from .results import MessageResult, RunResult, message_verdict
+
+SAME = ("suite", "title", "edition", "implementation", "adapter", "strict")  # what the shards of one run share
+
+
+def merge(results: list[RunResult], group_order: list[str], case_order: dict[str, int]) -> RunResult:
+    """One result of the shards ``results``, messages in ``group_order`` and cases in ``case_order`` (the
+    corpus's order, as an unsharded run has them); ValueError saying what does not fit."""
+    if len(results) < 2:
+        raise ValueError("give the results of every shard of the run (at least two)")
+    first = results[0]
+    for r in results:
+        if r.shard is None:
+            raise ValueError(f"a result of {r.implementation!r} is not a shard (it was run without --shard)")
+        for key in SAME:
+            if getattr(r, key) != getattr(first, key):
+                raise ValueError(f"the shards differ in {key}: {getattr(first, key)!r} and {getattr(r, key)!r}")
+    n = first.shard[1]
+    indices = sorted(r.shard[0] for r in results)
+    if any(r.shard[1] != n for r in results) or len(set(indices)) != len(indices):
+        raise ValueError(f"the shards are not each of one run of {n}: {', '.join(f'{r.shard[0]}/{r.shard[1]}' for r in results)}")
+    missing = sorted(set(range(1, n + 1)) - set(indices))
+    if missing:
+        raise ValueError(f"shard{'s' if len(missing) > 1 else ''} {', '.join(f'{k}/{n}' for k in missing)} missing")
+    seen: dict[str, int] = {}
+    cases: dict[str, list] = {}
+    for r in results:
+        for m in r.messages:
+            for c in m.cases:
+                if c.id in seen:
+                    raise ValueError(f"the case {c.id} is in shards {seen[c.id]}/{n} and {r.shard[0]}/{n}")
+                seen[c.id] = r.shard[0]
+                cases.setdefault(m.name, []).append(c)
+    keys = {m.name: m.key for r in results for m in r.messages}
+    rank = {name: i for i, name in enumerate(group_order)}
+    messages = []
+    for name in sorted(cases, key=lambda g: (rank.get(g, len(rank)), g)):
+        ordered = sorted(cases[name], key=lambda c: (case_order.get(c.id, len(case_order)), c.id))
+        messages.append(MessageResult(name, keys[name], message_verdict(ordered, first.strict), ordered))
+    notes = list(dict.fromkeys(n for r in results for n in r.notes))
+    notes.insert(0, f"the {n} shards of the run merged")
+    return RunResult(first.suite, first.title, first.edition, first.implementation, first.adapter, first.strict,
+                     min(r.started for r in results), round(sum(r.duration for r in results), 3), messages,
+                     "".join(r.stderr for r in results), notes, all(r.complete for r in results),
+                     [i for r in results for i in r.incidents],
+                     sorted(set(results[0].untested).intersection(*(r.untested for r in results))))
