@@ -77,7 +77,7 @@ class HostileNode:
                 "timestamp": 1.7e9, "src": self.node.system, "src_ent": 0, "dst": 0xFFFF, "dst_ent": 0xFF}, "fields": {}})
             out = [(self.address, beat)] * 5000 + out
         impostor = []
-        if self.mode in ("impostor-announce", "impostor-replies") and not self.impersonated and t > 3.0 \
+        if self.mode in ("impostor-announce", "impostor-replies") and not self.impersonated and t > 1.0 \
                 and any(self._reply(d) for _, d in mine):
             self.impersonated, self.redirect_until = True, t + REDIRECTED
             impostor = [(self.address, self._impostor(t))]

@@ -258,3 +258,16 @@ def test_echoed_requests_and_the_nodes_internal_traffic_are_not_taken_for_replie
     result = run_cases(session, suite, scenario_cases(cases), edition=suite.editions[0], adapter="virtual",
                        options=EVERYTHING, clock=link.now)
     assert {c.id: c.detail for c in result.cases if c.verdict is not Verdict.PASS} == {}
+
+
+@pytest.mark.parametrize("broken", ["req-id-not-echoed", "type-not-echoed", "wrong-system"])
+def test_an_answer_echoing_another_value_decides_its_step_at_once(suite, cases, broken):
+    """A reply addressed to the scenario's own entity is the answer to its request, whatever it echoes: the step
+    fails then, instead of waiting out its bound (and its retries) for a reply that will never match. In protocol
+    time (virtual), the whole set then takes about what it takes against the reference node."""
+    _, clean = run_virtual(suite, cases)
+    result, link = run_virtual(suite, cases, broken=broken)
+    assert link.now() <= 2 * clean.now()
+    caught, verdict = CAUGHT[broken]
+    assert verdicts(result)[caught] == verdict
+    assert "echoes" in next(c for c in result.cases if c.id == caught).detail

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import gc
 import json
 import sys
 from pathlib import Path
@@ -108,6 +109,7 @@ def command(args) -> int:
 
     targets = report_targets(args)
     suite, everything, cases = selection(args)
+    gc.freeze()  # the corpus stays loaded to the end: the collector need never walk it again
     try:
         options = live.options(args, suite, everything)
     except ValueError as exc:

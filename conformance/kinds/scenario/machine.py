@@ -99,6 +99,7 @@ class _Step:
     seen: list = field(default_factory=list)  # data already received, to tell duplicates
     unmatched: str = ""  # the first reply whose echoed value was not the request's (it is not this step's)
     unmatched_count: int = 0
+    misechoed: tuple | None = None  # (echo rule, what it echoed) of a reply to this scenario's entity echoing wrongly
 
 
 class Machine:
@@ -162,6 +163,8 @@ class Machine:
     def _take(self, t: float, epoch: float, parsed: Parsed) -> list[Composed]:
         step = self.step
         if step is None or not self._candidate(step, parsed):
+            if step is not None and step.misechoed is not None and step.until is not None:
+                return self._answered_wrongly(t, epoch, step, parsed)
             if self.watches(parsed) or parsed.problem:
                 self._log(t, "ignored", parsed, "not awaited by the current step" if not parsed.problem
                           else f"malformed: {parsed.problem}")
@@ -353,12 +356,22 @@ class Machine:
         request = self.sent[step.spec["reply_to"]].decoded.get("fields", {})
         for rule in exchange["correlation"]:  # a reply that echoes another request's value is not this one's
             if rule["kind"] == "echo" and not same(parsed.fields.get(rule["reply_field"]), request.get(rule["request_field"])):
+                echoed = (f"{rule['reply_field']}={show(parsed.fields.get(rule['reply_field']))}, "
+                          f"the request's {rule['request_field']} was {show(request.get(rule['request_field']))}")
                 if not step.unmatched:
-                    step.unmatched = (f"{rule['reply_field']}={show(parsed.fields.get(rule['reply_field']))}, "
-                                      f"the request's {rule['request_field']} was {show(request.get(rule['request_field']))}")
+                    step.unmatched = echoed
                 step.unmatched_count += 1
+                if step.misechoed is None and self._to_this_scenario(parsed):
+                    step.misechoed = (rule, echoed)
                 return False
         return True
+
+    def _to_this_scenario(self, parsed: Parsed) -> bool:
+        """Whether a frame is addressed to this scenario's own entity (no other request of the run comes from it),
+        from the node: then it answers this scenario's request, whatever it echoes."""
+        to = self.wire.destination(parsed)
+        return (to is not None and self.addressing.entity is not None and tuple(to) == (self.addressing.system,
+                self.addressing.entity) and self.addressing.from_node(self.wire, parsed))
 
     def _exchange(self, step: _Step) -> dict | None:
         ref = step.spec.get("reply_to")
@@ -454,6 +467,17 @@ class Machine:
         step.replies.append(parsed)
         self._log(t, "received", parsed, "the node is alive")
         self._find(step, "", True, f"{parsed.message} received after {self._rel(t) - self._started(step):.3f} s")
+
+    def _answered_wrongly(self, t: float, epoch: float, step: _Step, parsed: Parsed) -> list[Composed]:
+        """The node answered this scenario's request (to its own entity) echoing another value: the step's outcome
+        is decided at once, without waiting out its bound for a reply that will never match."""
+        rule, echoed = step.misechoed
+        self._log(t, "received", parsed, f"the answer to this request, echoing another value ({echoed})")
+        wanted = step.spec.get("expect") or step.spec.get("sequence")
+        self._find(step, "", False, f"the {wanted} addressed to this request's requester echoes {echoed}",
+                   rule["level"], rule["clause"])
+        step.until = None
+        return self._advance(t, epoch)
 
     def _expire(self, t: float, step: _Step) -> None:
         """The step's time is up: judge what it gathered."""
