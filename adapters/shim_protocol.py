@@ -15,6 +15,8 @@ import struct
 import sys
 
 DEFAULT_NAN = {4: 0x7FC00000, 8: 0x7FF8000000000000}
+_DECODE = json.JSONDecoder().decode  # made once: json.loads and json.dumps build them again at every call
+_ENCODE = json.JSONEncoder(separators=(",", ":"), allow_nan=False).encode
 FLOAT = {4: (struct.Struct("<f"), struct.Struct("<I")), 8: (struct.Struct("<d"), struct.Struct("<Q"))}
 
 
@@ -72,7 +74,7 @@ def respond(shim, line: bytes) -> str:
     """The answer line to one request line (one request, or a batch: a JSON array of requests, answered with an
     array of answers); a failure of the shim itself is ``internal``."""
     try:
-        request = json.loads(line)
+        request = _DECODE(line.decode("utf-8"))
     except ValueError as exc:
         return json.dumps({"id": None, "ok": False, "internal": True, "error": f"not JSON: {exc}"})
     if isinstance(request, list):
@@ -93,7 +95,7 @@ def answer(shim, request) -> str:
     except Exception as exc:
         reply = {"id": ident, "ok": False, "internal": True, "error": f"{type(exc).__name__}: {exc}"}
     try:
-        return json.dumps(reply, separators=(",", ":"), allow_nan=False)
+        return _ENCODE(reply)
     except ValueError as exc:
         return json.dumps({"id": ident, "ok": False, "internal": True, "error": f"unserialisable answer: {exc}"})
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .commands import add_all
+from . import commands
 from .errors import CorpusError, UsageError
 from .escaping import printable
 
@@ -25,7 +25,9 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; given the command line ``argv``, only the command it names is registered (the rest are for
+    --help and mistakes)."""
     parser = argparse.ArgumentParser(
         prog="imc-conformance",
         description="Conformance suite for underwater vehicle networking messages: IMC (LSTS) and ros_acomms_msgs "
@@ -33,12 +35,17 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Exit codes: 0 every message passes, 1 a failure (FAIL, CRASH, TIMEOUT, WAIVER_STALE; NON_STRICT and INCONCLUSIVE with "
                "--strict), 2 a usage, corpus or adapter error, 130 interrupted.")
     parser.add_argument("--version", action=_Version, help="show the version and exit")
-    add_all(parser.add_subparsers(dest="command", required=True))
+    sub = parser.add_subparsers(dest="command", required=True)
+    wanted = next((a for a in argv or () if not a.startswith("-")), None)
+    if wanted is not None and wanted not in commands.COMMANDS and wanted not in commands.suite_commands():
+        wanted = None
+    commands.add(sub, wanted)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(argv).parse_args(argv)
     from .core.waivers import WaiverError  # after parsing: --version and --help need none of the core
 
     try:

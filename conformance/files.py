@@ -13,6 +13,8 @@ import json
 from functools import cache
 from pathlib import Path
 
+import orjson
+
 from . import inputs
 from .cache import remembered
 from .errors import CorpusError
@@ -123,7 +125,7 @@ def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
     except ValueError as exc:
         raise CorpusError(str(exc)) from None
     if trusted(path, raw, suite.packaged):
-        doc = json.loads(raw)
+        doc = orjson.loads(raw)
         group = suite.group_of(doc)
         return [Case(data["id"], group, kind, data) for data in doc["cases"]]
     try:

@@ -1,5 +1,6 @@
 """The command line's commands, one module each (``add(subparsers)`` registers its options; its command function
-imports what it needs when it runs), and each suite's own commands (``suites/<name>/commands.py``)."""
+imports what it needs when it runs), and each suite's own commands (``suites/<name>/commands.py``, naming them in
+``NAMES``). Only the command asked for is registered (a run never pays for building the others' options)."""
 
 from __future__ import annotations
 
@@ -7,13 +8,14 @@ import importlib
 
 from ..suites import names as suite_names
 
-COMMANDS = ("run", "listing", "report", "generate", "pcap", "watch")  # in the order --help lists them
+COMMANDS = {"run": "run", "list": "listing", "report": "report", "generate": "generate", "pcap": "pcap",
+            "watch": "watch"}  # command -> its module, in the order --help lists them
 
 
-def add_all(sub) -> None:
-    for name in COMMANDS:
-        importlib.import_module(f"{__name__}.{name}").add(sub)
+def suite_commands() -> dict[str, object]:
+    """Each suite's own commands: name -> the module that adds it."""
     root = __name__.rpartition(".")[0]
+    out = {}
     for suite in suite_names():
         name = f"{root}.suites.{suite}.commands"
         try:
@@ -22,4 +24,16 @@ def add_all(sub) -> None:
             if exc.name != name:
                 raise
             continue
+        out.update(dict.fromkeys(module.NAMES, module))
+    return out
+
+
+def add(sub, wanted: str | None) -> None:
+    """Register the command ``wanted`` (None, or a name no command has: every command, for the help)."""
+    if wanted in COMMANDS:
+        importlib.import_module(f"{__name__}.{COMMANDS[wanted]}").add(sub)
+        return
+    for module in COMMANDS.values():
+        importlib.import_module(f"{__name__}.{module}").add(sub)
+    for module in dict.fromkeys(suite_commands().values()):
         module.add(sub)

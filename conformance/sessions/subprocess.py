@@ -317,11 +317,14 @@ class SubprocessSession:
 
     def __init__(self, argv: list[str], *, name: str, encoding_param: str, timeout: float = 5.0, cwd=None, env=None,
                  max_line: int = 1_000_000, pipeline: int = 256, hello_timeout: float | None = None,
-                 memory_limit: int = 2 << 30):
+                 memory_limit: int = 2 << 30, batch: bool = True):
+        """``batch``: send batches to a program whose hello offers them (False: one request a line whatever it
+        offers)."""
         self.argv, self.name, self.timeout, self.encoding_param = list(argv), name, timeout, encoding_param
         self.memory_limit = memory_limit  # bytes of data memory the program may use (RLIMIT_DATA); 0: no limit
         self.hello_timeout = timeout if hello_timeout is None else hello_timeout  # start-up may take longer
         self.cwd, self.env, self.max_line, self.pipeline = cwd, env, max_line, max(1, pipeline)
+        self.batch = batch
         self._tail = _StderrTail()
         self._ids = count(1)
         self._proc: _Process | None = None
@@ -418,7 +421,7 @@ class SubprocessSession:
             if not state.inflight:
                 self._proc.send(self._sent(state, state.replay.popleft()))
             return
-        batched = self._info.get("batch") is True
+        batched = self.batch and self._info.get("batch") is True
         batch = []
         while len(state.inflight) < self.pipeline and (call := state.next_call()) is not None:
             batch.append(self._sent(state, call))

@@ -13,6 +13,8 @@ import json
 from functools import cache, cached_property
 from pathlib import Path
 
+import orjson
+
 from ..core.suite import Suite
 
 MANIFEST = "manifest.json"
@@ -22,7 +24,7 @@ MANIFEST = "manifest.json"
 def manifest(packaged: Path) -> dict[str, dict]:
     """The packaged folder's manifest: file (relative path) -> {"sha256", and for case files "group", "kind"}."""
     path = packaged / MANIFEST
-    return json.loads(path.read_bytes())["files"] if path.exists() else {}
+    return orjson.loads(path.read_bytes())["files"] if path.exists() else {}
 
 
 def trusted(path: Path, raw: bytes, packaged: Path) -> bool:
@@ -39,7 +41,7 @@ def read_data_file(path: Path, schema: str | None, packaged: Path):
     if path.is_relative_to(packaged):
         raw = path.read_bytes()
         if trusted(path, raw, packaged):
-            return json.loads(raw)
+            return orjson.loads(raw)
     from ..errors import CorpusError
     from ..files import schema_error
     from ..inputs import read_json

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+NAMES = ("serve",)
+
 
 def add(sub) -> None:
     from .node.serve import add_command

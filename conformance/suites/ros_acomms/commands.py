@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+NAMES = ("ros-msg-files",)
+
 
 def add(sub) -> None:
     files = sub.add_parser("ros-msg-files", help="write ros_acomms_msgs .msg and .srv files of an edition")
