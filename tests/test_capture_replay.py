@@ -79,7 +79,7 @@ def test_the_replay_gives_the_live_verdicts(node, corpus, tmp_path):
     scenario = verdicts(live, "/scenario/") | verdicts(live, "/passive/")
     assert scenario and verdicts(doc, "/scenario/") | verdicts(doc, "/passive/") == scenario
     if not node:
-        assert code == 0 and set(verdicts(doc, "/capture/").values()) == {"PASS"}
+        assert code == 0 and set(verdicts(doc, "/capture/").values()) <= {"PASS", "IMPL_DEFINED"}  # BUSY: a reading
     if node.get("broken") in PASSIVE:
         assert verdicts(doc, "/capture/").get(PASSIVE[node["broken"]]) in ("FAIL", "NON_STRICT"), node
     if "loss" in node:  # a request lost on the way goes unanswered in the capture; duplicates are judged once
@@ -169,8 +169,8 @@ def test_a_robustness_recording_judges_the_node_not_the_sessions_own_frames(corp
     finally:
         recorder.close(complete=True)
     code, doc = judged(path, tmp_path)
-    assert set(verdicts(live, "").values()) == {"PASS"}
-    assert code == 0 and set(verdicts(doc, "/capture/").values()) == {"PASS"}
+    assert set(verdicts(live, "").values()) <= {"PASS", "IMPL_DEFINED"}  # IMPL_DEFINED: open readings (BUSY)
+    assert code == 0 and set(verdicts(doc, "/capture/").values()) <= {"PASS", "IMPL_DEFINED"}
     assert any("datagrams the session sent on purpose in its robustness phase" in n for n in doc["notes"])
     assert verdicts(doc, "/scenario/") == verdicts(live, "/scenario/")
 

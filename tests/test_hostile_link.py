@@ -61,7 +61,7 @@ def hostile_run(suite, cases, mode: str, capacity: int | None = None, dst: int |
 @pytest.mark.parametrize("mode", [m for m in MODES if m != "echo-only"])
 def test_a_correct_node_behind_a_hostile_link_never_fails(suite, cases, mode):
     result, link, node = hostile_run(suite, cases, mode, capacity=1000 if mode == "flood" else None)
-    failed = {c.id: c.detail for c in result.cases if c.verdict is not Verdict.PASS and c.verdict is not Verdict.INCONCLUSIVE}
+    failed = {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.INCONCLUSIVE, Verdict.IMPL_DEFINED)}
     assert failed == {}
     unjudged = [c for c in result.cases if c.verdict is Verdict.INCONCLUSIVE]
     assert unjudged, "the hostility was not seen at all"

@@ -82,9 +82,14 @@ class DataSuite(Suite):
 
     @cached_property
     def behaviour(self) -> dict | None:
-        """The exchanges file (request/reply rules, and the parameters, effects and services of live cases), or
-        None for a suite without one."""
-        return self.read_data("exchanges.json")
+        """The exchanges file (request/reply rules, and the parameters, effects and services of live cases) with
+        the ambiguity register (``ambiguities``: id -> entry, from ambiguities.json), or None for a suite without
+        one."""
+        doc = self.read_data("exchanges.json")
+        if doc is None:
+            return None
+        register = self.read_data("ambiguities.json", {"ambiguities": []})["ambiguities"]
+        return {**doc, "ambiguities": {a["id"]: a for a in register}}
 
     @cached_property
     def statements(self) -> list[dict]:

@@ -50,7 +50,7 @@ class Conductor:
         self.owners: dict[tuple, int] = {}
         self.entities: dict[int, int] = {}  # the entity each machine's requests came from (the latest wins)
         self._first_unique = self._next_unique = first_unique % UNIQUE_SPAN
-        self._entities, self._entity = entities, 0
+        self._entities = entities
         self._released: set[int] = set()  # machines seen to have released their resources
         self.impostors: list[str] = []  # replies that answer requests this run never sent
         self.lasting: list[str] = []  # impairments every machine started from now on is told of
@@ -94,8 +94,7 @@ class Conductor:
             for j in members:
                 self.pending.remove(j)
             busy |= program.resources()
-            entity = self._entities[self._entity % len(self._entities)]
-            self._entity += 1
+            entity = self._entity_for(job)
             addressing = Addressing(self.addressing.system, entity, self.addressing.node)
             self.entities[entity] = job
             machine = program.machine(addressing, self.unique, [programs[j] for j in members])
@@ -106,6 +105,17 @@ class Conductor:
             if getattr(program, "exclusive", False):
                 break
         return out + self._reap(t)
+
+    def _entity_for(self, job: int) -> int:
+        """The entity a job's requests come from: by its place in the run, not by when it started (a replay that
+        starts two jobs of one instant in the other order addresses them as the live run did), unless a running
+        machine still speaks from it."""
+        taken = {m.addressing.entity for m in self.running.values() if hasattr(m, "addressing")}
+        for i in range(len(self._entities)):
+            entity = self._entities[(job + i) % len(self._entities)]
+            if entity not in taken:
+                return entity
+        return self._entities[job % len(self._entities)]
 
     def deliver(self, t: float, parsed) -> list[Outgoing]:
         out = []

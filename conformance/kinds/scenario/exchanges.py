@@ -3,6 +3,10 @@ names, resolved through the suite's wire."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+from .matchers import hashable, same
+
 
 def resolved(wire, message: str, path: str, names, edition: str) -> list:
     """What the wire carries for each of ``names`` of field ``path`` (names the edition lacks left out)."""
@@ -20,6 +24,15 @@ def selected(wire, message: str, fields: dict, when: dict, edition: str) -> bool
     return all(fields.get(f) in resolved(wire, message, f, names, edition) for f, names in when.items())
 
 
+def silence_allowed(wire, exchange: dict, request: dict, edition: str) -> str | None:
+    """The ambiguity under which the seeds define no reply to this request (the exchange's ``silence``), or None."""
+    message = exchange["request"]["message"]
+    for rule in exchange.get("silence", ()):
+        if selected(wire, message, request, rule["when"], edition) and ("null" not in rule or request.get(rule["null"]) is None):
+            return rule["ambiguity"]
+    return None
+
+
 def exchange_for(exchanges, wire, message: dict, edition: str) -> dict | None:
     """The exchange a message (decoded form, values resolved) opens as a request, if any."""
     for ex in exchanges:
@@ -28,3 +41,63 @@ def exchange_for(exchanges, wire, message: dict, edition: str) -> dict | None:
                                                                  request.get("when", {}), edition):
             return ex
     return None
+
+
+@dataclass(frozen=True)
+class States:
+    """The states of an exchange's replies for one request, as the wire carries them: ``progress`` (under way),
+    ``terminal`` (ending it: exactly one, nothing after), ``open`` (value -> ambiguity id: the seeds leave open
+    whether the state ends the request or delays it, so a sequence may end on it or go on), ``unknown`` (the
+    ambiguity id reading any other value as an open state rather than a failure, or None); ``level`` and
+    ``clause``: what the rules of one terminal, nothing after it and known states rest on; ``open_wait``: how long
+    a sequence listens after an open state before taking it as the end."""
+
+    field: str
+    progress: frozenset
+    terminal: frozenset
+    open: dict
+    unknown: str | None
+    level: str
+    clause: str
+    open_wait: float = 0.0  # seconds a sequence keeps listening after an open state, for the request to go on
+
+    def kind(self, value) -> str:
+        """``progress``, ``terminal``, ``open`` or ``unknown`` for a reply's state value."""
+        value = hashable(value)
+        if value in self.terminal:
+            return "terminal"
+        if value in self.progress:
+            return "progress"
+        return "open" if value in self.open else "unknown"
+
+
+def states_for(wire, exchange: dict, request: dict, edition: str) -> States | None:
+    """The states of ``exchange``'s replies to a request with fields ``request`` (its ``by_request`` entry for
+    the request's value, where it has one), or None for an exchange without states."""
+    state = exchange.get("state")
+    if state is None:
+        return None
+    chosen = dict(state)
+    by = state.get("by_request")
+    if by is not None:
+        message = exchange["request"]["message"]
+        for name, override in by["values"].items():
+            if same(request.get(by["field"]), next(iter(resolved(wire, message, by["field"], [name], edition)), None)):
+                chosen.update(override)
+                break
+
+    def values(names) -> frozenset:
+        return frozenset(hashable(v) for v in resolved(wire, exchange["reply"], state["field"], names, edition))
+
+    opened = {}
+    for name, ambiguity in chosen.get("open", {}).items():
+        for v in values([name]):
+            opened[v] = ambiguity
+    return States(state["field"], values(chosen["progress"]) - opened.keys(), values(chosen["terminal"]) - opened.keys(),
+                  opened, chosen.get("unknown"), chosen.get("level", "MUST"), chosen["clause"], chosen.get("open_wait", 0.0))
+
+
+def weaker(a: str, b: str) -> str:
+    """The weaker of two levels (MUST, SHOULD, INFO)."""
+    order = ("INFO", "SHOULD", "MUST")
+    return min(a, b, key=order.index)

@@ -3,7 +3,8 @@
 ``admit`` declines scenarios whose effects the run does not allow; ``plan`` turns a scenario into one request the session runs (a ``Program``), or into a verdict
 reached without the target: INCONCLUSIVE when a parameter it needs is not given or the profile says it
 does not apply, UNSUPPORTED when the target does not claim its service. ``judge`` turns what the machine
-found into checks: a failed MUST is FAIL, a failed SHOULD is NON_STRICT (failing under --strict).
+found into checks: a failed MUST is FAIL, a failed SHOULD is NON_STRICT (failing under --strict), an open reading of
+the seeds (INFO) IMPL_DEFINED.
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ class ScenarioKind(LiveKind):
 
     def program(self, case: dict, edition: str, options: dict) -> Program:
         return Program(case["id"], case, self.exchanges, self.wire, edition, dict(options.get("params", {})),
-                       float(options.get("time_scale", 1.0)))
+                       float(options.get("time_scale", 1.0)), self.behaviour.get("ambiguities", {}))
 
     def reply_group(self, case: dict) -> str:
         """The message a scenario waits for first (where a malformed frame that names none is filed)."""
@@ -119,7 +120,10 @@ def judgement(case: dict, request: Request, answer: Answer, reply_group: str) ->
         if f.get("inconclusive"):
             checks.append(CheckResult(f["check"], Verdict.INCONCLUSIVE, f["detail"], clause=f["clause"]))
             continue
-        level = "SHOULD" if f["check"] in relaxed and relaxable(f["check"]) else f["level"]
+        level = "SHOULD" if f["check"] in relaxed and relaxable(f["check"]) and f["level"] == "MUST" else f["level"]
+        if level == "INFO":  # an open reading of the seeds: what the node chose, never a failure
+            checks.append(CheckResult(f["check"], Verdict.IMPL_DEFINED, f["detail"], clause=f["clause"]))
+            continue
         verdict = Verdict.PASS if f["passed"] else (Verdict.FAIL if level == "MUST" else Verdict.NON_STRICT)
         detail = f["detail"] if f["passed"] else f"{level}: {f['detail']}"
         checks.append(CheckResult(f["check"], verdict, detail, clause=f["clause"]))

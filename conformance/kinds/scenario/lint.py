@@ -17,6 +17,7 @@ def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
     suite has the message; ``fields_of(message)``: its field names; ``statements``: the suite's behavioural
     statements by id (a step may cover only a testable one); ``params``: a run's parameters, to check that its
     messages can carry them (else each parameter's example)."""
+    register = behaviour.get("ambiguities", {})
     for i, step in enumerate(case["steps"]):
         for key in ("covers", "exercises"):
             for j, sid in enumerate(step.get(key, ())):
@@ -24,6 +25,14 @@ def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
                     return f".steps[{i}].{key}[{j}]", f"{sid!r} is not a statement of statements.json"
                 if "untestable" in statements[sid]:
                     return f".steps[{i}].{key}[{j}]", f"{sid!r} is marked untestable in statements.json"
+        if "if_silent" in step and step["if_silent"] not in register:
+            return f".steps[{i}].if_silent", f"{step['if_silent']!r} is not an entry of ambiguities.json"
+        if "if_silent" in step and "reply_to" in step:
+            return (f".steps[{i}].if_silent", "a reply's silence is the exchange's to allow (exchanges.json silence), "
+                                              "not a step's")
+        problem = _normative_problem(step, statements)
+        if problem:
+            return f".steps[{i}]", problem
     for key, vocabulary in (("needs", "params"), ("effects", "effects")):
         for i, name in enumerate(case.get(key, ())):
             if name not in behaviour[vocabulary]:
@@ -95,14 +104,32 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
                 return f"{where}.{kind}", f"step {ref!r} opens the exchange {exchange['id']!r}, answered by {exchange['reply']}"
             if kind == "sequence" and "state" not in exchange:
                 return where, f"the exchange {exchange['id']!r} has no states for a sequence"
+            if kind == "sequence":
+                states = exchange["state"]
+                names = {*states["progress"], *states["terminal"], *states.get("open", {})}
+                names |= {n for v in states.get("by_request", {}).get("values", {}).values()
+                          for n in (*v.get("progress", ()), *v.get("terminal", ()), *v.get("open", {}))}
+                opened = [*states.get("open", {}).values(), *([states["unknown"]] if "unknown" in states else ())]
+                opened += [rule["ambiguity"] for rule in exchange.get("silence", ())]
+                opened += [a for v in states.get("by_request", {}).get("values", {}).values() for a in v.get("open", {}).values()]
+                register = behaviour.get("ambiguities", {})
+                for ambiguity in opened:
+                    if ambiguity not in register:
+                        return where, f"the exchange {exchange['id']!r} cites {ambiguity!r}, not an entry of ambiguities.json"
+                for name in (*step.get("on_state", {}), *step.get("not_after", {}).get("states", ())):
+                    if name not in names:
+                        key = "on_state" if name in step.get("on_state", {}) else "not_after.states"
+                        return f"{where}.{key}.{name}", f"{name!r} is not a state of the exchange {exchange['id']!r}"
             if step.get("release"):
                 problem = _release_problem(case, i, ref, exchange)
                 if problem:
                     return where + ".release", problem
         elif kind == "sequence":
             return where, "a sequence needs reply_to"
-        for key in ("fields", "terminal"):
-            for name, spec in step.get(key, {}).items():
+        matchers = [(key, step.get(key, {})) for key in ("fields", "terminal")]
+        matchers += [(f"on_state.{state}", more) for state, more in step.get("on_state", {}).items()]
+        for key, specs in matchers:
+            for name, spec in specs.items():
                 if name not in fields_of(message):
                     return f"{where}.{key}.{name}", f"{message} has no field {name!r}"
                 try:
@@ -126,3 +153,16 @@ def _release_problem(case: dict, index: int, ref: str, exchange: dict) -> str | 
               and isinstance(fields.get(r["request_field"]), dict) and "$unique" in fields[r["request_field"]]]
     return None if unique else (f"the exchange {exchange['id']!r} ties replies to step {ref!r} by no $unique value, "
                                 "so another scenario's replies could be taken for its own")
+
+
+def _normative_problem(step: dict, statements: dict) -> str | None:
+    """Why a step that waits may not be MUST: a MUST step must cover a MUST statement (statements.json quotes the
+    seed's words; a MUST statement rests on shall/must, a named reply or a correlating field) or, for a step that
+    only exercises what a MUST statement names, cite one; a step that covers nothing testable is not judged."""
+    if not any(k in step for k in WAITS) or step.get("level", "MUST") != "MUST":
+        return None
+    cited = [*step.get("covers", ()), *step.get("exercises", ())]
+    if any(statements[sid]["level"] == "MUST" for sid in cited if sid in statements):
+        return None
+    return ("a MUST step must cover (or exercise) a MUST statement of statements.json, whose words are the seed's "
+            "normative text; cite one, or make the step SHOULD")

@@ -8,6 +8,12 @@ them); ``sequence``: replies passing through progress states to exactly one term
 nothing more for a quiet period; ``silence``: no such message for a while; ``alive``: the node still
 sends something; ``wait``.
 
+Levels come from the seeds' words: a step is MUST or SHOULD, and the rules of a sequence's states carry the level
+of the text they rest on (exchanges.json). Where the seeds leave the reading open (the ambiguity register), the
+node's choice is an INFO check naming the register's entry, never a failure: a state that may end a request or
+delay it (BUSY), a state value the definitions do not name, silence where the seeds define no reply (the exchange's
+``silence``, or ``if_silent`` on a step that awaits something other than a reply).
+
 A step that fails for want of a frame (no reply, no terminal state) while the session could not see everything
 (the link reported an impairment: the kernel dropped datagrams) or while a frame of the awaited message could
 not be judged is INCONCLUSIVE, never FAIL: the missing frame may have been among those the suite did not see.
@@ -19,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-from .exchanges import exchange_for, resolved
+from .exchanges import States, exchange_for, resolved, silence_allowed, states_for, weaker
 from .matchers import hashable, mismatch, same, show
 from .values import Scope, Unresolved, resolve_matcher, resolve_message, resolve_plain
 from .wire import Addressing, Composed, Parsed, Wire
@@ -39,6 +45,7 @@ class Program:
     edition: str
     params: dict
     time_scale: float = 1.0
+    ambiguities: dict = field(default_factory=dict)  # id -> entry of the suite's ambiguity register
 
     def machine(self, addressing: Addressing, unique, members) -> "Machine":
         """The state machine that runs it, for a session speaking from ``addressing``; ``unique(name)`` gives
@@ -100,6 +107,9 @@ class _Step:
     unmatched: str = ""  # the first reply whose echoed value was not the request's (it is not this step's)
     unmatched_count: int = 0
     misechoed: tuple | None = None  # (echo rule, what it echoed) of a reply to this scenario's entity echoing wrongly
+    bound: float | None = None  # when the step's own time is up (a quiet period after a terminal state may move until)
+    open_end: str | None = None  # the ambiguity id when the sequence's last state is one the seeds leave open
+    readings: dict = field(default_factory=dict)  # ambiguity id -> what the node did that the seeds leave open
 
 
 class Machine:
@@ -112,6 +122,7 @@ class Machine:
         self.timeline: list[dict] = []
         self.frames: list[Frame] = []
         self.sent: dict[str, Composed] = {}
+        self.sent_at: dict[str, float] = {}  # send step -> when it was sent
         self.keys: list[tuple] = []  # (reply message, ((field, value), ...)) its requests gave replies to echo
         self.keys_seen = 0  # how many of keys the conductor has registered
         self.backlog: list[Parsed] = []  # replies to a request a later step awaits
@@ -237,7 +248,7 @@ class Machine:
             if kind == "accepted" and spec["accepted"] in self.acks:
                 self._on_accepted(t, self.step, self.acks[spec["accepted"]])
                 continue
-            self.step.until = t + self._bound(_length(spec))
+            self.step.until = self.step.bound = t + self._bound(_length(spec))
             held = [p for p in self.backlog if self._answered_step(p) == spec.get("reply_to")]
             if held:
                 self.backlog = [p for p in self.backlog if p not in held]
@@ -296,6 +307,7 @@ class Machine:
         message = resolve_message(spec["send"], self.scope, self.wire, self.edition)
         composed = self.wire.compose(message, spec.get("encoding"), self.addressing, epoch, spec["id"], self.edition)
         self.sent[spec["id"]] = composed
+        self.sent_at[spec["id"]] = t
         self.scope.sent[spec["id"]] = composed.decoded.get("fields", {})
         exchange = self.program.exchange_for(message)
         sent = composed.decoded.get("fields", {})
@@ -373,6 +385,13 @@ class Machine:
         return (to is not None and self.addressing.entity is not None and tuple(to) == (self.addressing.system,
                 self.addressing.entity) and self.addressing.from_node(self.wire, parsed))
 
+    def _states(self, step: _Step) -> States | None:
+        """The states of the replies the step awaits, for the request it answers."""
+        exchange = self._exchange(step)
+        if exchange is None:
+            return None
+        return states_for(self.wire, exchange, self.sent[step.spec["reply_to"]].decoded.get("fields", {}), self.edition)
+
     def _exchange(self, step: _Step) -> dict | None:
         ref = step.spec.get("reply_to")
         if ref is None:
@@ -431,33 +450,63 @@ class Machine:
 
     def _on_sequence(self, t: float, step: _Step, parsed: Parsed) -> None:
         spec = step.spec
-        exchange = self._exchange(step) or {}
-        states = exchange.get("state", {})
-        value = parsed.fields.get(states.get("field"))
-        name = self._state_name(spec["sequence"], states.get("field"), value)
+        states = self._states(step)
+        field_ = states.field if states else None
+        value = parsed.fields.get(field_)
+        name = self._state_name(spec["sequence"], field_, value)
         step.replies.append(parsed)
         for check, level, clause, bad in self._correlate(step, parsed):
             _note(step, (check, level, clause), bad)
         if spec.get("fields"):
             _note(step, ("fields", spec.get("level", "MUST"), None), self._match_fields(spec["sequence"], spec["fields"], parsed))
-        if step.terminal is not None:
-            _note(step, ("after-terminal", "MUST", states.get("clause")),
-                  f"{name} after the terminal state {self._terminal_name(step)}")
-            self._log(t, "received", parsed, f"{name}: after the terminal state")
+        if states is None:
             return
-        terminal = [self._resolve_state(spec["sequence"], states, s) for s in states.get("terminal", ())]
-        progress = [self._resolve_state(spec["sequence"], states, s) for s in states.get("progress", ())]
-        if any(same(value, s) for s in terminal):
-            step.terminal = parsed
-            step.until = t + self._bound(spec.get("quiet", 1.0))
+        if "not_after" in spec:
+            _note(step, ("not-after", spec.get("level", "MUST"), None), self._too_late(t, step, states, value, name))
+        if step.terminal is not None:
+            if step.open_end is None:
+                _note(step, ("after-terminal", states.level, states.clause),
+                      f"{name} after the terminal state {self._terminal_name(step)}")
+                self._log(t, "received", parsed, f"{name}: after the terminal state")
+                return
+            self._read(step, step.open_end, f"{self._terminal_name(step)} was followed by {name}: read as a delay, "
+                                            "not the end of the request")
+            step.terminal, step.open_end = None, None
+            step.until = max(step.bound, t + self._bound(spec.get("quiet", 1.0)))  # the request goes on: its own bound
+        kind = states.kind(value)
+        if kind == "unknown" and states.unknown is not None:
+            self._read(step, states.unknown, f"{name} is not a state the definitions name for this request")
+            kind, opened = "open", states.unknown
+        else:
+            opened = states.open.get(hashable(value))
+        if kind in ("terminal", "open"):
+            step.terminal, step.open_end = parsed, opened
+            quiet = spec.get("quiet", 1.0) if kind == "terminal" else max(spec.get("quiet", 1.0), states.open_wait)
+            step.until = t + self._bound(quiet)  # after an open state the request may still go on: listen longer
             self.released = self.released or (spec.get("release", False) and self._last_wait(step))
-            self._log(t, "received", parsed, f"{name}: terminal state")
-        elif any(same(value, s) for s in progress):
+            self._log(t, "received", parsed, f"{name}: terminal state" if kind == "terminal" else
+                      f"{name}: a state that may end the request or delay it (open reading {opened})")
+        elif kind == "progress":
             self._log(t, "received", parsed, f"{name}: progress state")
         else:
-            _note(step, ("states", "MUST", states.get("clause")),
-                  f"{name} is neither a progress nor a terminal state of {spec['sequence']}")
+            _note(step, ("states", states.level, states.clause),
+                  f"{name} is neither a progress nor a terminal state of {spec['sequence']} for this request")
             self._log(t, "received", parsed, f"{name}: not a state of this exchange")
+
+    def _too_late(self, t: float, step: _Step, states: States, value, name: str) -> str | None:
+        """Why a reply breaks the step's ``not_after`` (a state that may not come later than a number of seconds
+        after the request, the node's own seconds: not scaled), or None."""
+        rule = step.spec["not_after"]
+        names = resolved(self.wire, step.spec["sequence"], states.field, rule["states"], self.edition)
+        if not any(same(value, v) for v in names):
+            return None
+        limit = float(resolve_plain(rule["seconds"], self.scope)) + rule.get("tolerance", 1.0)
+        after = t - self.sent_at[step.spec["reply_to"]]
+        return None if after <= limit else f"{name} {after:.3f} s after the request, later than {limit:g} s"
+
+    def _read(self, step: _Step, ambiguity: str, what: str) -> None:
+        """Note what the node did where the seeds leave the reading open (the ambiguity register's ``ambiguity``)."""
+        step.readings.setdefault(ambiguity, what)
 
     def _on_silence(self, t: float, step: _Step, parsed: Parsed) -> None:
         step.replies.append(parsed)
@@ -500,38 +549,82 @@ class Machine:
             malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
             refused = self.acks.get(spec.get("reply_to"))
             refused = f"; the call was refused: {refused}" if refused else ""
-            self._find(step, "", False, f"{what} within {bound} s{tries}{malformed}{refused}{_unmatched(step)}",
-                       blind=self._blind(step))
+            what = f"{what} within {bound} s{tries}{malformed}{refused}{_unmatched(step)}"
+            if got or not self._silence_allowed(step, what):
+                self._find(step, "", False, what, blind=self._blind(step))
         self.timeline.append({"t": self._rel(t), "event": "timer", "step": spec["id"], "note": "the step's time is up"})
 
     def _judge_sequence(self, step: _Step, bound) -> None:
         spec = step.spec
         if not step.replies:
             malformed = f"; {step.malformed} malformed frames of it" if step.malformed else ""
-            self._find(step, "", False, f"no {spec['sequence']} within {bound} s{malformed}{_unmatched(step)}",
-                       blind=self._blind(step))
+            what = f"no {spec['sequence']} within {bound} s{malformed}{_unmatched(step)}"
+            if self._silence_allowed(step, what):
+                return
+            self._find(step, "", False, what, blind=self._blind(step))
             return
         self._find(step, "", True, f"{len(step.replies)} {spec['sequence']} received")
-        states = (self._exchange(step) or {}).get("state", {})
+        states = self._states(step)
         for (check, level, clause), bad in step.failures.items():
             if check not in ("after-terminal", "states"):
                 self._find(step, check, bad is None, bad or "as required", level, clause)
-        trail = " -> ".join(self._state_name(spec["sequence"], states.get("field"), r.fields.get(states.get("field")))
+        if states is None:
+            return
+        trail = " -> ".join(self._state_name(spec["sequence"], states.field, r.fields.get(states.field))
                             for r in step.replies)
-        clause = states.get("clause")
+        level = weaker(spec.get("level", "MUST"), states.level)
         if step.terminal is None:
-            self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})",
-                       step.spec.get("level", "MUST"), clause, blind=self._blind(step))
+            self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})", level, states.clause,
+                       blind=self._blind(step))
         else:
-            bad = self._match_fields(spec["sequence"], spec.get("terminal", {}), step.terminal)
+            if step.open_end is not None:
+                self._read(step, step.open_end, f"ended in {self._terminal_name(step)}: read as the end of the request")
+            bad = self._match_fields(spec["sequence"], self._terminal_matchers(step, states), step.terminal)
             self._find(step, "terminal", bad is None, bad or f"ended in {self._terminal_name(step)} ({trail})",
-                       step.spec.get("level", "MUST"), clause)
+                       level, states.clause)
         for check in ("states", "after-terminal"):
-            key = (check, "MUST", clause)
+            key = (check, states.level, states.clause)
             if key in step.failures or check == "after-terminal" and step.terminal is not None:
                 bad = step.failures.get(key)
                 ok = "nothing after the terminal state" if check == "after-terminal" else "every state known"
-                self._find(step, check, bad is None, bad or ok, "MUST", clause)
+                self._find(step, check, bad is None, bad or ok, states.level, states.clause)
+        self._readings(step)
+
+    def _terminal_matchers(self, step: _Step, states: States) -> dict:
+        """The fields the terminal reply must hold: the step's ``terminal``, and its ``on_state`` entry for the
+        state it ended in."""
+        matchers = dict(step.spec.get("terminal", {}))
+        value = step.terminal.fields.get(states.field)
+        for name, more in step.spec.get("on_state", {}).items():
+            try:
+                if same(value, self.wire.resolve(step.spec["sequence"], states.field, name, self.edition)):
+                    matchers.update(more)
+            except KeyError:
+                continue  # a state this edition does not have
+        return matchers
+
+    def _silence_allowed(self, step: _Step, what: str) -> bool:
+        """Where the register reads silence as allowed (the exchange's ``silence`` for the request, or the step's
+        ``if_silent`` where it awaits no reply), the lack of a reply is noted as that reading, not failed (unless
+        the session could not see everything: then it is not judged)."""
+        ambiguity = step.spec.get("if_silent")
+        exchange = self._exchange(step)
+        if exchange is not None:
+            request = self.sent[step.spec["reply_to"]].decoded.get("fields", {})
+            ambiguity = silence_allowed(self.wire, exchange, request, self.edition)
+        if ambiguity is None or self._blind(step) is not None or self.suspect:
+            return False
+        self._read(step, ambiguity, what)
+        self._readings(step)
+        return True
+
+    def _readings(self, step: _Step) -> None:
+        """One INFO check per open reading the step met: never a failure, always in the report."""
+        for ambiguity, what in step.readings.items():
+            entry = self.program.ambiguities.get(ambiguity, {})
+            reading = f": {entry['suite']}" if "suite" in entry else ""
+            self._find(step, f"reading-{ambiguity}", True, f"{what} (open reading {ambiguity}{reading})", "INFO",
+                       entry.get("clause"))
 
     # ------------------------------------------------------------------ helpers
 
@@ -572,12 +665,6 @@ class Machine:
             entry["step"] = self.step.spec["id"]
         self.timeline.append(entry)
 
-    def _resolve_state(self, message: str, states: dict, name):
-        try:
-            return self.wire.resolve(message, states["field"], name, self.edition)
-        except KeyError:
-            return None  # a state this edition does not have
-
     def _state_name(self, message: str, path: str | None, value) -> str:
         if path is None:
             return message
@@ -585,8 +672,9 @@ class Machine:
         return f"{path}={named.get('fields', {}).get(path, value)}"
 
     def _terminal_name(self, step: _Step) -> str:
-        states = (self._exchange(step) or {}).get("state", {})
-        return self._state_name(step.spec["sequence"], states.get("field"), step.terminal.fields.get(states.get("field")))
+        field_ = self._states(step).field
+        return self._state_name(step.spec["sequence"], field_, step.terminal.fields.get(field_))
+
 
 
 def _length(spec: dict):

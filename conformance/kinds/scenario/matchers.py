@@ -8,7 +8,8 @@ null), ``null``, ``pattern`` (a regular expression the whole text matches), ``co
 ``lacks_message`` (an inline message anywhere inside: a name, or ``{"abbrev", "fields"}`` whose fields it
 must hold among its own), ``encoded_at_most`` (the value takes at most that many bytes on the wire, as the
 suite's wire counts them), ``bits_within`` and ``bits_below`` (a number of bits at most, or below, 8 times
-the bytes of a sibling field named by the matcher), ``all_of`` (a list of matchers, each must hold). Values are already resolved (enum names to numbers, parameters to their values)
+the bytes of a sibling field named by the matcher), ``all_of`` (a list of matchers, each must hold), ``any_of``
+(a list of matchers, one must hold). Values are already resolved (enum names to numbers, parameters to their values)
 when they reach ``mismatch``.
 """
 
@@ -18,7 +19,7 @@ import math
 import re
 
 KEYS = ("equal", "one_of", "none_of", "range", "any", "present", "null", "pattern", "contains_item",
-        "contains_message", "lacks_message", "encoded_at_most", "bits_within", "bits_below", "all_of")
+        "contains_message", "lacks_message", "encoded_at_most", "bits_within", "bits_below", "all_of", "any_of")
 
 
 def is_matcher(spec) -> bool:
@@ -34,6 +35,9 @@ def mismatch(value, spec, size_of=None, siblings: dict | None = None) -> str | N
         return None if same(value, spec["equal"]) else f"{show(value)}, expected {show(spec['equal'])}"
     if "all_of" in spec:
         return "; ".join(filter(None, (mismatch(value, m, size_of, siblings) for m in spec["all_of"]))) or None
+    if "any_of" in spec:
+        whys = [mismatch(value, m, size_of, siblings) for m in spec["any_of"]]
+        return None if None in whys else " and ".join(whys)
     if "none_of" in spec:
         taken = any(same(value, v) for v in spec["none_of"])
         return f"{show(value)}, expected none of {', '.join(show(v) for v in spec['none_of'])}" if taken else None

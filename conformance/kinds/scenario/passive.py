@@ -17,11 +17,11 @@ from dataclasses import dataclass, field
 
 from ...capture.findings import Finding, Watched
 from ...core.verdicts import Verdict
-from .exchanges import resolved
+from .exchanges import States, resolved, silence_allowed, states_for, weaker
 from .matchers import hashable, same, show
 from .wire import Parsed
 
-LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT}
+LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT, "INFO": Verdict.IMPL_DEFINED}
 
 
 @dataclass
@@ -32,7 +32,7 @@ class _Rule:
     when: dict[str, frozenset]
     reply_when: dict[str, frozenset]
     echoes: list[dict]
-    terminal: frozenset | None
+    stateful: bool  # its replies carry states (exchanges.json ``state``)
     within: float
 
 
@@ -43,7 +43,9 @@ class _Open:
     key: tuple
     deadline: float
     answered: bool = False
+    states: States | None = None  # the states of its replies, for this request
     terminal: Watched | None = None
+    open_end: str | None = None  # the ambiguity id when its last state is one the seeds leave open
     orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
 
 
@@ -51,7 +53,7 @@ class PassiveExchanges:
     """A tracker of one capture's exchanges. ``anyone``: the system id meaning "no system in particular"."""
 
     def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None):
-        self.wire, self.anyone = wire, anyone
+        self.wire, self.anyone, self.edition = wire, anyone, edition
         self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
         self.by_request: dict[str, list[_Rule]] = {}
         self.by_reply: dict[str, list[_Rule]] = {}
@@ -119,7 +121,8 @@ class PassiveExchanges:
         if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
                for o in same_key):
             return  # a resend of an open request is the same exchange
-        o = _Open(rule, w, key, w.time + rule.within)
+        o = _Open(rule, w, key, w.time + rule.within,
+                  states=states_for(self.wire, rule.exchange, w.fields, self.edition) if rule.stateful else None)
         self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
         self.open[id(rule)].append(o)
@@ -151,21 +154,28 @@ class PassiveExchanges:
         if not o.answered:  # within the bound: a request is judged unanswered once its bound has passed
             o.answered = True
             out.append(self._finding(o, "answered", Verdict.PASS, ex["clause"], "", w))
-        if rule.terminal is not None:
+        if o.states is not None:
             out += self._state(o, w)
         return out
 
     def _state(self, o: _Open, w: Watched) -> list[Finding]:
-        state = o.rule.exchange["state"]
-        value = w.fields.get(state["field"])
+        states = o.states
+        value = w.fields.get(states.field)
+        named = f"{w.message} {states.field}={self._name(w.message, states.field, value)}"
+        out = []
         if o.terminal is not None:
-            return [self._finding(o, "after-terminal", Verdict.FAIL, state["clause"],
-                                  f"{w.message} {state['field']}={self._name(w.message, state['field'], value)} after "
-                                  f"the terminal state (frame {o.terminal.number})", w)]
-        if hashable(value) in o.rule.terminal:
-            o.terminal = w
-            return [self._finding(o, "terminal", Verdict.PASS, state["clause"], "", w)]
-        return []
+            if o.open_end is None:
+                return [self._finding(o, "after-terminal", LEVELS[states.level], states.clause,
+                                      f"{named} after the terminal state (frame {o.terminal.number})", w)]
+            out.append(self._finding(o, f"reading/{o.open_end}", Verdict.IMPL_DEFINED, states.clause,
+                                     f"the open state of frame {o.terminal.number} was followed by {named}: read as a "
+                                     f"delay (open reading {o.open_end})", w))
+            o.terminal = o.open_end = None
+        kind = states.kind(value)
+        if kind == "terminal" or kind == "open" or (kind == "unknown" and states.unknown is not None):
+            o.terminal, o.open_end = w, (None if kind == "terminal" else states.open.get(hashable(value), states.unknown))
+            out.append(self._finding(o, "terminal", Verdict.PASS, states.clause, "", w))
+        return out
 
     def _answered_by(self, mine, w: Watched) -> _Open | None:
         """The request a reply answers among those it matches: its addressee's before another system's, and the
@@ -227,11 +237,16 @@ class PassiveExchanges:
                 return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
                                       f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
+            silent = silence_allowed(self.wire, ex, o.request.fields, self.edition)
+            if silent is not None:  # the seeds define no reply to this request: an open reading, never a failure
+                return [self._finding(o, f"reading/{silent}", Verdict.IMPL_DEFINED, ex["clause"],
+                                      f"no {ex['reply']} {self._between(o)} within {bound:g} s (open reading {silent})",
+                                      o.request)]
             return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
                                   f"no {ex['reply']} {self._between(o)} within {bound:g} s", o.request)]
         self.ended[id(o.rule)].append(o)
-        if o.rule.terminal is not None and o.terminal is None:
-            return [self._finding(o, "terminal", LEVELS[ex["level"]], ex["state"]["clause"],
+        if o.states is not None and o.terminal is None:
+            return [self._finding(o, "terminal", LEVELS[weaker(ex["level"], o.states.level)], o.states.clause,
                                   f"no terminal {ex['reply']} within {bound:g} s", o.request)]
         return []
 
@@ -257,13 +272,11 @@ class PassiveExchanges:
             return {f: frozenset(hashable(v) for v in resolved(self.wire, message, f, names, edition))
                     for f, names in when.items()}
 
-        state = ex.get("state")
         return _Rule(ex, values(ex["request"]["message"], ex["request"].get("when", {})),
                      values(ex["reply"], ex.get("reply_when", {})),
-                     [c for c in ex["correlation"] if c["kind"] == "echo"],
-                     values(ex["reply"], {state["field"]: state["terminal"]})[state["field"]] if state else None,
-                     ex["within"] * scale)
+                     [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex, ex["within"] * scale)
 
 
 def _matches(fields: dict, when: dict[str, frozenset]) -> bool:
     return all(hashable(fields.get(f)) in values for f, values in when.items())
+

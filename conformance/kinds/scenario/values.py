@@ -113,6 +113,6 @@ def resolve_matcher(spec, message: str, path: str, scope: Scope, wire, edition: 
         return {key: kept}
     if key in ("equal", "contains_item"):
         return {**spec, key: resolve_value(arg, message, path, scope, wire, edition)}
-    if key == "all_of":
-        return {"all_of": [resolve_matcher(m, message, path, scope, wire, edition) for m in arg]}
+    if key in ("all_of", "any_of"):
+        return {key: [resolve_matcher(m, message, path, scope, wire, edition) for m in arg]}
     return spec

@@ -58,7 +58,7 @@ class ImcSuite(DataSuite):
     packaged = IMC
     data_schemas = {"definitions.json": "definitions.schema.json", "rules.json": "rules.schema.json",
                     "exchanges.json": "exchanges.schema.json", "statements.json": "statements.schema.json",
-                    "errata.json": "errata.schema.json"}
+                    "errata.json": "errata.schema.json", "ambiguities.json": "ambiguities.schema.json"}
 
     def __init__(self, folder: Path, defs: Definitions):
         super().__init__(folder)

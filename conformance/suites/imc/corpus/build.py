@@ -56,7 +56,8 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
         files[f"cases/{mdef.id:03d}-{mdef.abbrev}.json"] = json.dumps(doc, indent=1, ensure_ascii=True) + "\n"
     files["coverage.md"] = coverage_markdown(defs, per_message)
     statements = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))["statements"]
-    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()))
+    register = json.loads(imc_data("ambiguities.json").read_text(encoding="utf-8"))["ambiguities"]
+    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()), register)
     return files
 
 

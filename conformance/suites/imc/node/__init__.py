@@ -1,10 +1,11 @@
 """A reference IMC node, sans-IO: the seeds' behaviour over a simulated acoustic channel and fake Iridium and
-SMS gateways, and the broken behaviours that show each rule is caught. ``ReferenceNode`` is imported when first
-used: registering ``serve`` on the command line needs only ``BREAKS``."""
+SMS gateways, the broken behaviours that show each rule is caught, and the variants that take another reading the
+seeds allow. ``ReferenceNode`` is imported when first used: registering ``serve`` on the command line needs only
+``BREAKS`` and ``VARIANTS``."""
 
-from .breaks import BREAKS
+from .breaks import BREAKS, VARIANTS
 
-__all__ = ["BREAKS", "ReferenceNode"]
+__all__ = ["BREAKS", "ReferenceNode", "VARIANTS"]
 
 
 def __getattr__(name: str):

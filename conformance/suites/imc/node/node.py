@@ -9,7 +9,8 @@ codec does not judge (nested too deep) is dropped and counted like a malformed o
 Acoustic operations go over a simulated channel: each peer has a range, a reply takes the two-way travel
 time at 1500 m/s, and the modem is busy until the operation ends. Iridium and SMS go to fake gateways that
 always deliver. ``loss`` and ``dup`` drop and repeat datagrams with a seeded generator; loss touches only
-the requests and replies of idempotent exchanges (exchanges.json), which a scenario may resend.
+the requests and replies of idempotent exchanges (exchanges.json), which a scenario may resend, and never more than
+``LOSS_RUN`` of one message in a row.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from ..definitions import Definitions
 from ....kinds.vector.floats import as_float
 from ..values import text_bytes
 from ..wire import ImcWire
-from .breaks import BREAKS
+from .breaks import BREAKS, VARIANTS
 
 SOUND_SPEED = 1500.0  # m/s
 TURNAROUND = 0.05  # s a peer's modem takes to answer
@@ -38,20 +39,25 @@ ACOUSTIC_ENTITY = 43
 SERVICE_URL = re.compile(r"imc\+udp://([^:/;]+|\[[0-9a-fA-F:]+\]):([0-9]+)/?")
 MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
+LOSS_RUN = 2  # at most this many datagrams of one message dropped in a row by ``loss``
 
 
 class ReferenceNode:
     def __init__(self, defs: Definitions, behaviour: dict, *, edition: str, address: tuple[str, int],
                  name: str = "imc-reference", system: int = 0x00A0, peers: dict[str, float] | None = None,
                  loss: float = 0.0, dup: float = 0.0, seed: int = 0, broken: str | None = None,
-                 epoch0: float = 1_700_000_000.0):
+                 variant: str | None = None, epoch0: float = 1_700_000_000.0):
         if broken is not None and broken not in BREAKS:
             raise ValueError(f"unknown broken behaviour {broken!r}; one of: {', '.join(BREAKS)}")
+        if variant is not None and variant not in VARIANTS:
+            raise ValueError(f"unknown variant {variant!r}; one of: {', '.join(VARIANTS)}")
+        self.variant = variant
         self.defs, self.wire, self.edition = defs, ImcWire(defs, {}), edition
         self.exchanges = behaviour["exchanges"]
         self.address, self.name, self.system = address, name, system
         self.peers = dict(peers if peers is not None else {"imc-peer-1": 150.0, "imc-peer-2": 1200.0})
         self.loss, self.dup, self.rng, self.broken, self.epoch0 = loss, dup, random.Random(seed), broken, epoch0
+        self.loss_runs: dict[str, int] = {}  # message -> how many of it were dropped in a row
         self.queue: list = []
         self.order = itertools.count()
         self.contacts: dict[int, tuple[str, int]] = {}
@@ -61,6 +67,7 @@ class ReferenceNode:
         self.beacons: list = []
         self.kept: list[dict] = []  # RemoteCommands kept for resending
         self.acoustic_dead = False
+        self.lbl_dead = False
         self.dropped = 0  # datagrams that did not decode
         self.unjudged = 0  # frames beyond the reference codec's bounds (nested too deep), dropped as well
         self.next_beat = self.next_announce = None
@@ -110,7 +117,7 @@ class ReferenceNode:
             if self.broken != "no-heartbeat":
                 out += [(addr, self._frame(t, "Heartbeat", {}, dst=UNKNOWN_SYSTEM, ent=0)) for addr in self.contacts.values()]
         if self.next_announce is not None and self.next_announce <= t:
-            self.next_announce = t + 10.0
+            self.next_announce = t + (60.0 if self.variant == "slow-announce" else 10.0)
             out += [(addr, self._announce(t)) for addr in self.contacts.values()]
         while self.queue and self.queue[0][0] <= t:
             _, _, dest, data = heapq.heappop(self.queue)
@@ -135,9 +142,11 @@ class ReferenceNode:
                 return
             self.contacts[src], self.heard_at[src] = address, t
             if fresh:
-                self._later(t, PROCESSING, address, self._announce(t))
+                period = 60.0 if self.variant == "slow-announce" else 10.0
+                if self.variant != "slow-announce":
+                    self._later(t, PROCESSING, address, self._announce(t))
                 self.next_beat = t if self.next_beat is None else self.next_beat
-                self.next_announce = t + 10.0 if self.next_announce is None else self.next_announce
+                self.next_announce = t + period if self.next_announce is None else self.next_announce
             return
 
     def _announce(self, t: float) -> bytes:
@@ -155,14 +164,22 @@ class ReferenceNode:
 
     def _on_LblConfig(self, t: float, message: dict) -> None:
         op = message["fields"]["op"]
+        if self.lbl_dead:
+            return
         if op == self._v("LblConfig", "op", "SET_CFG"):
-            self.beacons = list(message["fields"]["beacons"])
+            merged = self.beacons if self.broken == "merges-set-cfg" else []
+            self.beacons = merged + list(message["fields"]["beacons"])
             if self.broken == "acknowledges-set-cfg":
                 self._reply(t, PROCESSING, message, "LblConfig", {"op": self._v("LblConfig", "op", "CUR_CFG"),
                                                                   "beacons": self.beacons})
         elif op == self._v("LblConfig", "op", "GET_CFG") and self.broken != "no-cur-cfg":
             beacons = self.beacons[:-1] if self.broken == "other-beacons" else self.beacons
             self._reply(t, PROCESSING, message, "LblConfig", {"op": self._v("LblConfig", "op", "CUR_CFG"), "beacons": beacons})
+        elif op == self._v("LblConfig", "op", "CUR_CFG"):
+            if self.broken == "stores-cur-cfg":  # a reply to someone's GET_CFG: it changes nothing
+                self.beacons = list(message["fields"]["beacons"])
+        elif self.broken == "stops-after-unknown-op":  # an operation it does not know: ignored
+            self.lbl_dead = True
 
     def _on_AcousticOperation(self, t: float, message: dict) -> None:
         if self.acoustic_dead:
@@ -185,20 +202,28 @@ class ReferenceNode:
 
         if t < self.modem_free_at:
             state(PROCESSING, "BUSY")
+            if self.variant == "busy-then-completes":
+                self._on_AcousticOperation(self.modem_free_at, message)
             return
         progress, success, failure = plans[op]
+        silent = self.variant == "silent-where-allowed"
+        if silent and (op in ("MSG_SHORT", "REVERSE_RANGE") or f["msg"] is None and op == "MSG"):
+            return
         if op in ("MSG", "MSG_SHORT") and f["msg"] is None:
-            if self.broken != "ignores-empty-msg":
-                state(PROCESSING, failure)  # nothing to send: the request cannot be fulfilled
+            state(PROCESSING, failure)  # nothing to send: the request cannot be fulfilled
             return
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
         distance = self.peers.get(_text(f["system"]))
         travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + TURNAROUND
         self.modem_free_at = t + travel
+        if self.variant == "queued-first" and progress == "MSG_IP":
+            state(PROCESSING / 2, "MSG_QUEUED")
         state(PROCESSING, progress)
         if distance is None:
-            state(travel, failure)
+            reached = (op == "ABORT" and self.broken == "acks-unreachable"
+                       or op == "MSG" and self.variant == "msg-to-unreachable-done")
+            state(travel, success if reached else failure)
         else:
             state(travel, success, float(distance) if "RANGE" in op else 0.0)
 
@@ -219,6 +244,8 @@ class ReferenceNode:
 
         if t < self.modem_free_at:
             status(PROCESSING, "BUSY", info="the modem is busy")
+            if self.variant == "busy-then-completes":
+                self._on_AcousticRequest(self.modem_free_at, message)
             return
         distance = self.peers.get(_text(f["destination"]))
         if kind == "RAW" and (f["msg"] is None or f["msg"]["abbrev"] != "DevDataBinary") and self.broken != "raw-accepted":
@@ -235,6 +262,8 @@ class ReferenceNode:
         if self.broken == "ignores-timeout":
             travel += timeout + 2.0
         self.modem_free_at = t + travel
+        if self.variant == "queued-first":
+            status(PROCESSING / 2, "QUEUED")
         status(PROCESSING, "IN_PROGRESS")
         if self.broken == "no-terminal":
             return
@@ -243,6 +272,8 @@ class ReferenceNode:
             status(timeout, "INPUT_FAILURE", info="timed out")
             return
         final = "RANGE_RECEIVED" if "RANGE" in kind else "SENT"
+        if final == "RANGE_RECEIVED" and self.variant == "sent-before-range-received":
+            status(travel / 2, "SENT")
         status(travel, final, float(distance) if final == "RANGE_RECEIVED" else 0.0)
         if self.broken == "status-after-terminal":
             status(travel + 0.1, "IN_PROGRESS")
@@ -252,7 +283,8 @@ class ReferenceNode:
     def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
         req_id = message["fields"]["req_id"]
         req_id = (req_id + 1) % 0x10000 if self.broken == "req-id-not-echoed" else req_id
-        for delay, name in ((PROCESSING, "QUEUED"), (0.2, "TRANSMIT"), (0.5, "OK")):
+        late = message["fields"]["ttl"] + 2.0 if self.broken == "transmits-after-ttl" else 0.0
+        for delay, name in ((PROCESSING, "QUEUED"), (0.2 + late, "TRANSMIT"), (0.5 + late, "OK")):
             fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": ""}
             self._reply(t, delay, message, "IridiumTxStatus", fields)
 
@@ -271,15 +303,20 @@ class ReferenceNode:
             fields = {"req_id": req_id, "type": f["type"], "max_size": f["max_size"], "data": None}
         elif kind == "QUERY":
             fields = {"req_id": req_id, "type": self._v("HistoricDataQuery", "type", "REPLY"), "max_size": f["max_size"],
-                      "data": self._historic_data(f["max_size"])}
+                      "data": self._historic_data(t, f["max_size"])}
         else:
             return
         self._reply(t, PROCESSING, message, "HistoricDataQuery", fields)
 
-    def _historic_data(self, max_size: int) -> dict | None:
+    def _historic_data(self, t: float, max_size: int) -> dict | None:
         """The kept items, highest priority first, as a HistoricData of at most ``max_size`` bytes (as many
-        items as fit; none when not even an empty one fits)."""
-        items = sorted(self.kept, key=lambda m: -m["fields"].get("priority", 0))
+        items as fit; none when not even an empty one fits); RemoteCommands whose timeout passed are dropped."""
+        if self.broken not in ("resends-expired", "keeps-expired-commands"):
+            self.kept = [m for m in self.kept if m["abbrev"] != "RemoteCommand"
+                         or as_float(m["fields"]["timeout"]) > self.epoch0 + t]
+        items = list(self.kept)
+        if self.broken != "transmits-in-arrival-order":
+            items.sort(key=lambda m: -m["fields"].get("priority", 0))
         while True:
             data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": items}}
             if self.broken == "ignores-max-size" or self.wire.size_of("HistoricDataQuery", "data", data) <= max_size:
@@ -316,7 +353,7 @@ class ReferenceNode:
             return
         header = {"timestamp": self.epoch0 + t, "src": command["original_source"], "src_ent": UNKNOWN_ENTITY,
                   "dst": self.system, "dst_ent": UNKNOWN_ENTITY}
-        handler(t, {"abbrev": command["cmd"]["abbrev"], "header": header, "fields": command["cmd"]["fields"]})
+        handler(t, {"abbrev": command["cmd"]["abbrev"], "header": header, "fields": command["cmd"]["fields"], "executed": True})
 
     # ------------------------------------------------------------------ sending
 
@@ -329,7 +366,8 @@ class ReferenceNode:
         if self.broken == "late":
             delay += 30.0
         frame = self._frame(t + delay, abbrev, fields, dst=dst, ent=entity, dst_ent=dst_ent)
-        if self._lost({"abbrev": abbrev, "fields": fields}, reply=True):
+        resendable = not request.get("executed")  # a command carried in HistoricData is never sent again
+        if resendable and self._lost({"abbrev": abbrev, "fields": fields}, reply=True):
             return
         self._later(t, delay, address, frame)
         if self.dup and self.rng.random() < self.dup:
@@ -355,10 +393,15 @@ class ReferenceNode:
     # ------------------------------------------------------------------ helpers
 
     def _lost(self, message: dict, reply: bool = False) -> bool:
-        """Drop at random (``loss``) a request or reply of an idempotent exchange."""
+        """Drop at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
+        in a row of one message (a scenario resends a few times: a link that loses every try is a dead link, not a
+        lossy one)."""
         if not self.loss or not self._idempotent(message, reply):
             return False
-        return self.rng.random() < self.loss
+        run = self.loss_runs.get(message["abbrev"], 0)
+        lost = run < LOSS_RUN and self.rng.random() < self.loss
+        self.loss_runs[message["abbrev"]] = run + 1 if lost else 0
+        return lost
 
     def _idempotent(self, message: dict, reply: bool) -> bool:
         for ex in self.exchanges:
@@ -377,6 +420,8 @@ class ReferenceNode:
     def _status(self, name: str) -> int:
         """AcousticStatus.status by name; the seeds' edition lacks UNSUPPORTED (666 fits no uint8, E1) and
         INV_ADDR: INPUT_FAILURE and ERROR stand in."""
+        if name == "UNSUPPORTED" and self.variant == "old-unsupported-code":
+            return 154  # 666 truncated to a byte (erratum E1)
         value = self._v("AcousticStatus", "status", name)
         if value is None or value > 0xFF:
             value = self._v("AcousticStatus", "status", {"UNSUPPORTED": "INPUT_FAILURE", "INV_ADDR": "ERROR"}[name])

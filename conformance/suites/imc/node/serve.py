@@ -8,7 +8,7 @@ import socket
 import sys
 import time
 
-from .breaks import BREAKS
+from .breaks import BREAKS, VARIANTS
 
 
 def add_command(sub) -> None:
@@ -24,11 +24,15 @@ def add_command(sub) -> None:
                        help="a system on the simulated acoustic channel and its range (repeatable; default "
                             "imc-peer-1:150 and imc-peer-2:1200)")
     serve.add_argument("--edition", help="the IMC edition it speaks (default: the suite's first)")
-    serve.add_argument("--loss", type=probability, default=0.0, help="drop this share of idempotent requests and replies")
+    serve.add_argument("--loss", type=probability, default=0.0,
+                       help="drop this share of idempotent requests and replies (never more than two of one message in a row)")
     serve.add_argument("--dup", type=probability, default=0.0, help="send this share of replies twice")
     serve.add_argument("--seed", type=int, default=0, help="seed of the loss and duplication (default 0)")
     serve.add_argument("--break", dest="broken", choices=sorted(BREAKS), metavar="NAME",
                        help="break one rule: " + "; ".join(f"{k}: {v}" for k, v in BREAKS.items()))
+    serve.add_argument("--variant", choices=sorted(VARIANTS), metavar="NAME",
+                       help="a correct node taking another reading the seeds allow (vectors/imc/ambiguities.json): "
+                            + "; ".join(f"{k}: {v}" for k, v in VARIANTS.items()))
     serve.set_defaults(func=command_serve)
 
 
@@ -101,9 +105,10 @@ def command_serve(args) -> int:
     offset = time.time() - time.monotonic()
     node = ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=sock.getsockname()[:2], name=name,
                          system=system, peers=peers, loss=args.loss, dup=args.dup, seed=args.seed, broken=args.broken,
-                         epoch0=offset)
+                         variant=args.variant, epoch0=offset)
     print(f"reference IMC node {name} (0x{system:04X}, {edition}) on {url(*sock.getsockname()[:2])}"
-          + (f", broken: {args.broken}" if args.broken else "") + "; Ctrl-C stops it", file=sys.stderr, flush=True)
+          + (f", broken: {args.broken}" if args.broken else "") + (f", variant: {args.variant}" if args.variant else "")
+          + "; Ctrl-C stops it", file=sys.stderr, flush=True)
     signal.signal(signal.SIGTERM, _interrupt)  # kill stops it as Ctrl-C does, with its summary
     try:
         serve_forever(sock, node)
