@@ -22,6 +22,7 @@ from .matchers import hashable, same, show
 from .wire import Parsed
 
 LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT, "INFO": Verdict.IMPL_DEFINED}
+STATE_CACHE = 1024  # request values whose reply states are kept resolved
 
 
 @dataclass
@@ -54,6 +55,7 @@ class PassiveExchanges:
 
     def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None):
         self.wire, self.anyone, self.edition = wire, anyone, edition
+        self.state_cache: dict[tuple, States] = {}
         self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
         self.by_request: dict[str, list[_Rule]] = {}
         self.by_reply: dict[str, list[_Rule]] = {}
@@ -121,8 +123,7 @@ class PassiveExchanges:
         if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
                for o in same_key):
             return  # a resend of an open request is the same exchange
-        o = _Open(rule, w, key, w.time + rule.within,
-                  states=states_for(self.wire, rule.exchange, w.fields, self.edition) if rule.stateful else None)
+        o = _Open(rule, w, key, w.time + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
         self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
         self.open[id(rule)].append(o)
@@ -176,6 +177,18 @@ class PassiveExchanges:
             o.terminal, o.open_end = w, (None if kind == "terminal" else states.open.get(hashable(value), states.unknown))
             out.append(self._finding(o, "terminal", Verdict.PASS, states.clause, "", w))
         return out
+
+    def _states(self, rule: _Rule, fields: dict) -> States:
+        """The states of a request's replies, resolved once per exchange and request value (a bounded cache: a
+        capture may hold any value)."""
+        by = rule.exchange["state"].get("by_request")
+        key = (id(rule), hashable(fields.get(by["field"])) if by else None)
+        states = self.state_cache.get(key)
+        if states is None:
+            states = states_for(self.wire, rule.exchange, fields, self.edition)
+            if len(self.state_cache) < STATE_CACHE:
+                self.state_cache[key] = states
+        return states
 
     def _answered_by(self, mine, w: Watched) -> _Open | None:
         """The request a reply answers among those it matches: its addressee's before another system's, and the
