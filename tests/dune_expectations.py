@@ -21,10 +21,10 @@ pytestmark = pytest.mark.skipif(not (REPORTS / "dune-seed.json").exists(),
 # Per profile: the verdict of each message, and the cases whose verdict is a known DUNE behaviour.
 MESSAGES = {
     "seed": {"Heartbeat": "FAIL", "Announce": "PASS", "SmsTx": "UNSUPPORTED", "IridiumMsgTx": "FAIL", "IridiumTxStatus": "PASS",
-             "HistoricDataQuery": "FAIL", "RemoteCommand": "PASS", "LblConfig": "FAIL", "AcousticOperation": "FAIL",
+             "HistoricData": "PASS", "HistoricDataQuery": "FAIL", "RemoteCommand": "PASS", "LblConfig": "FAIL", "AcousticOperation": "FAIL",
              "AcousticSystemsQuery": "FAIL", "AcousticSystems": "PASS", "AcousticRequest": "FAIL"},
     "dune": {"Heartbeat": "FAIL", "Announce": "PASS", "SmsTx": "UNSUPPORTED", "IridiumMsgTx": "FAIL", "IridiumTxStatus": "PASS",
-             "HistoricDataQuery": "FAIL", "RemoteCommand": "PASS", "LblConfig": "FAIL", "AcousticOperation": "FAIL",
+             "HistoricData": "PASS", "HistoricDataQuery": "FAIL", "RemoteCommand": "PASS", "LblConfig": "FAIL", "AcousticOperation": "FAIL",
              "AcousticSystemsQuery": "FAIL", "AcousticSystems": "PASS", "AcousticRequest": "INCONCLUSIVE"},
 }
 DEFECTS = {  # case -> (verdict under both profiles, words its detail must hold)
@@ -46,6 +46,7 @@ PASSES = ("imc/AcousticOperation/scenario/range", "imc/AcousticOperation/scenari
           "imc/HistoricDataQuery/scenario/max-size", "imc/HistoricDataQuery/scenario/sample-order",
           "imc/RemoteCommand/scenario/executed", "imc/RemoteCommand/scenario/expires-while-stored",
           "imc/IridiumMsgTx/scenario/status", "imc/IridiumMsgTx/scenario/ttl", "imc/Announce/scenario/well-formed",
+          "imc/AcousticSystemsQuery/scenario/two-clients", "imc/RemoteCommand/scenario/forwarded-to-recipient",
           "imc/Heartbeat/scenario/periodic")
 
 

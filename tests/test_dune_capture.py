@@ -55,7 +55,7 @@ def test_dune_replayed_gives_the_live_verdicts(judged):
     code, doc = judged
     verdicts = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
     scenarios = {k: v for k, v in verdicts.items() if "/scenario/" in k}
-    assert len(scenarios) == 82
+    assert len(scenarios) == 86
     assert {k: v for k, v in verdicts.items() if v != "PASS"} == NOT_PASS
     assert {m["name"]: m["verdict"] for m in doc["messages"]} == MESSAGES
     assert code == 1
@@ -66,7 +66,7 @@ def test_dune_frames_are_all_valid(judged):
     _, doc = judged
     frames = {c["id"]: c for m in doc["messages"] for c in m["cases"] if "/capture/frame/" in c["id"]}
     assert frames and all(c["id"].endswith("/frame/valid") and c["verdict"] == "PASS" for c in frames.values())
-    assert doc["notes"][0].startswith("1,612 records, 1,612 datagrams on the ports judged")
+    assert doc["notes"][0].startswith("2,751 records, 2,751 datagrams on the ports judged")
 
 
 def test_the_passive_rules_name_who_did_not_answer(judged):
@@ -77,5 +77,5 @@ def test_the_passive_rules_name_who_did_not_answer(judged):
     assert counts == {"FAIL": "11 exchanges", "INCONCLUSIVE": "1 exchange"}  # the last: the recording ends first
     listed = [k for k in case["checks"] if k["check"].startswith("frame ")]
     assert [k["verdict"] for k in listed] == ["FAIL"] * 11 + ["INCONCLUSIVE"]
-    assert all("no AcousticStatus from system 209 to 19630 within 20 s" in k["detail"] for k in listed[:11])
+    assert all("no AcousticStatus from system 209 to 19517 within 20 s" in k["detail"] for k in listed[:11])
     assert "the capture ends" in listed[11]["detail"]

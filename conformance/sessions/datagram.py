@@ -40,6 +40,7 @@ class Transport(Protocol):
 
 class Peer(Protocol):
     system: int | None  # the session's own id on the link
+    other: int | None  # its second id (a second client), or None
     node: int | None  # the target's id, given or learned
     ready: bool  # the target has shown itself (or was given)
 
@@ -99,7 +100,8 @@ class DatagramSession:
                 yield job, Answer("inconclusive", reason=why)
             return
         conductor = self.conductor = Conductor(jobs, lambda job: job.request.params["program"],
-                                               Addressing(self.peer.system, None, self.peer.node), self.transport.epoch,
+                                               Addressing(self.peer.system, None, self.peer.node,
+                                                          getattr(self.peer, "other", None)), self.transport.epoch,
                                                first_unique=self.first_unique)
         self._transmit(conductor.start(self.transport.now()))
         while True:

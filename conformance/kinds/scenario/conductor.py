@@ -95,7 +95,7 @@ class Conductor:
                 self.pending.remove(j)
             busy |= program.resources()
             entity = self._entity_for(job)
-            addressing = Addressing(self.addressing.system, entity, self.addressing.node)
+            addressing = Addressing(self.addressing.system, entity, self.addressing.node, self.addressing.other)
             self.entities[entity] = job
             machine = program.machine(addressing, self.unique, [programs[j] for j in members])
             self.running[job], self.members[job] = machine, members
@@ -180,7 +180,7 @@ class Conductor:
                 owner = job
         if owner is None and self.jobs:
             to = self.program_of(self.jobs[0]).wire.destination(parsed)
-            if to is not None and to[0] == self.addressing.system and to[1] in self.entities:
+            if to is not None and to[0] in (self.addressing.system, self.addressing.other) and to[1] in self.entities:
                 owner = self.entities[to[1]]
         return owner
 

@@ -55,7 +55,7 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
     examples = {name: int(p["example"], 0) if p["type"] == "integer" else p["example"]
                 for name, p in behaviour["params"].items()}
     examples.update(params or {})
-    scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2})
+    scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2, "other": 3})
     program = Program(case["id"], case, tuple(behaviour["exchanges"]), wire, edition, examples)
     seen, sends = set(), {}
     for i, step in enumerate(case["steps"]):
@@ -65,6 +65,8 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
         seen.add(step["id"])
         if ("setup" in step or "accepted" in step) and wire.transport != "call":
             return where, "setup and accepted steps are for handlers called through an adapter, not a live target"
+        if ("as" in step or "to" in step) and wire.transport != "datagram":
+            return where, "a second system (as, to) speaks on a live link, not through an adapter"
         if "setup" in step:
             try:
                 resolve_plain(step["setup"]["state"], scope)
@@ -81,7 +83,8 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
                 return where + ".send.abbrev", f"unknown message {message['abbrev']!r}"
             try:
                 resolved = resolve_message(message, scope, wire, edition)
-                composed = wire.compose(resolved, step.get("encoding"), Addressing(1, 1, 2), 0.0, step["id"], edition)
+                composed = wire.compose(resolved, step.get("encoding"), Addressing(1, 1, 2, 3).speaking_as(step.get("as")),
+                                        0.0, step["id"], edition)
             except (Unresolved, KeyError, ValueError) as exc:
                 return where + ".send", f"cannot be sent in {edition}: {exc}"
             scope.sent[step["id"]] = composed.decoded.get("fields", {})
@@ -116,6 +119,11 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
                 for ambiguity in opened:
                     if ambiguity not in register:
                         return where, f"the exchange {exchange['id']!r} cites {ambiguity!r}, not an entry of ambiguities.json"
+                if "not_after" in step:
+                    try:
+                        float(resolve_plain(step["not_after"]["seconds"], scope))
+                    except (Unresolved, TypeError, ValueError) as exc:
+                        return f"{where}.not_after.seconds", f"not a number of seconds: {exc}"
                 for name in (*step.get("on_state", {}), *step.get("not_after", {}).get("states", ())):
                     if name not in names:
                         key = "on_state" if name in step.get("on_state", {}) else "not_after.states"

@@ -116,13 +116,14 @@ class Machine:
     def __init__(self, program: Program, addressing: Addressing, unique):
         self.program, self.addressing = program, addressing
         self.scope = Scope(dict(program.params), unique,
-                           addresses={"system": addressing.system, "node": addressing.node})
+                           addresses={"system": addressing.system, "node": addressing.node, "other": addressing.other})
         self.wire, self.edition = program.wire, program.edition
         self.findings: list[Finding] = []
         self.timeline: list[dict] = []
         self.frames: list[Frame] = []
         self.sent: dict[str, Composed] = {}
         self.sent_at: dict[str, float] = {}  # send step -> when it was sent
+        self.sent_from: dict[str, tuple] = {}  # send step -> (system, entity) it spoke as
         self.keys: list[tuple] = []  # (reply message, ((field, value), ...)) its requests gave replies to echo
         self.keys_seen = 0  # how many of keys the conductor has registered
         self.backlog: list[Parsed] = []  # replies to a request a later step awaits
@@ -258,17 +259,23 @@ class Machine:
         return out
 
     def _answered_step(self, parsed: Parsed) -> str | None:
-        """The send step whose request this reply echoes (by the exchange's echo fields), if any."""
+        """The send step whose request this reply echoes (by the exchange's echo fields), if any; for a reply
+        addressed to the session's second system, the latest request sent as it that such a reply answers."""
         if parsed.decoded is None:
             return None
+        to = self.wire.destination(parsed)
+        by_address = None
         for step_id, composed in self.sent.items():
             exchange = self.program.exchange_for({"abbrev": composed.message, "fields": composed.decoded["fields"]})
-            echoes = [r for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo"]
-            if exchange and echoes and exchange["reply"] == parsed.message and all(
-                    same(parsed.fields.get(r["reply_field"]), composed.decoded["fields"].get(r["request_field"]))
-                    for r in echoes):
+            if not exchange or exchange["reply"] != parsed.message:
+                continue
+            echoes = [r for r in exchange.get("correlation", ()) if r["kind"] == "echo"]
+            if echoes and all(same(parsed.fields.get(r["reply_field"]), composed.decoded["fields"].get(r["request_field"]))
+                              for r in echoes):
                 return step_id
-        return None
+            if to is not None and to[0] == self.addressing.other and tuple(to) == self.sent_from[step_id]:
+                by_address = step_id
+        return by_address
 
     def acknowledge(self, t: float, epoch: float, step_id: str, problem: str | None) -> list[Composed]:
         """The target acknowledged the call a send or setup step made (``problem``: why it refused, or None)."""
@@ -305,9 +312,11 @@ class Machine:
     def _send(self, t: float, epoch: float, spec: dict) -> Composed:
         self.scope.epoch = epoch
         message = resolve_message(spec["send"], self.scope, self.wire, self.edition)
-        composed = self.wire.compose(message, spec.get("encoding"), self.addressing, epoch, spec["id"], self.edition)
+        speaker = self.addressing.speaking_as(spec.get("as"))
+        composed = self.wire.compose(message, spec.get("encoding"), speaker, epoch, spec["id"], self.edition)
         self.sent[spec["id"]] = composed
         self.sent_at[spec["id"]] = t
+        self.sent_from[spec["id"]] = (speaker.system, speaker.entity)
         self.scope.sent[spec["id"]] = composed.decoded.get("fields", {})
         exchange = self.program.exchange_for(message)
         sent = composed.decoded.get("fields", {})
@@ -359,6 +368,8 @@ class Machine:
         wanted = spec.get(step.kind) if step.kind != "wait" else None
         if not isinstance(wanted, str) or parsed.message != wanted:
             return False
+        if parsed.decoded is not None and not self._for_this_speaker(step, parsed):
+            return False
         exchange = self._exchange(step)
         if exchange is None or parsed.decoded is None:
             return True
@@ -378,12 +389,24 @@ class Machine:
                 return False
         return True
 
+    def _for_this_speaker(self, step: _Step, parsed: Parsed) -> bool:
+        """Whether a frame may be for the step: not when it is addressed to one of the session's two systems and
+        the step awaits the other's (a reply to the request one client sent is not the other client's); a step
+        that awaits no reply takes what is addressed to the system it names (``to``), or to the session's own."""
+        to = self.wire.destination(parsed)
+        ours = (self.addressing.system, self.addressing.other)
+        if to is None or self.addressing.other is None or to[0] not in ours:
+            return True
+        ref = step.spec.get("reply_to")
+        wanted = self.sent_from[ref][0] if ref is not None else self.addressing.speaking_as(step.spec.get("to")).system
+        return to[0] == wanted
+
     def _to_this_scenario(self, parsed: Parsed) -> bool:
         """Whether a frame is addressed to this scenario's own entity (no other request of the run comes from it),
         from the node: then it answers this scenario's request, whatever it echoes."""
         to = self.wire.destination(parsed)
-        return (to is not None and self.addressing.entity is not None and tuple(to) == (self.addressing.system,
-                self.addressing.entity) and self.addressing.from_node(self.wire, parsed))
+        return (to is not None and self.addressing.entity is not None and tuple(to) in self.sent_from.values()
+                and self.addressing.from_node(self.wire, parsed))
 
     def _states(self, step: _Step) -> States | None:
         """The states of the replies the step awaits, for the request it answers."""
@@ -411,7 +434,7 @@ class Machine:
                 continue  # a reply that does not echo is set aside as another request's (``_candidate``)
             if kind == "to-requester":
                 name = kind
-                to, me = self.wire.destination(parsed), (self.addressing.system, self.addressing.entity)
+                to, me = self.wire.destination(parsed), self.sent_from[step.spec["reply_to"]]
                 bad = None if to is None or tuple(to) == me else f"addressed to {_address(to)}, the requester is {_address(me)}"
             else:
                 name = kind
@@ -674,7 +697,6 @@ class Machine:
     def _terminal_name(self, step: _Step) -> str:
         field_ = self._states(step).field
         return self._state_name(step.spec["sequence"], field_, step.terminal.fields.get(field_))
-
 
 
 def _length(spec: dict):

@@ -13,12 +13,18 @@ from typing import Protocol
 
 @dataclass(frozen=True)
 class Addressing:
-    """Who talks: the session (``system``, and one ``entity`` per scenario, so replies can be told apart) and
-    the node (``node``; None until learned). Suites without addresses leave them None."""
+    """Who talks: the session (``system``, and one ``entity`` per scenario, so replies can be told apart), the
+    session's second system on the link (``other``: a second client, for steps sent ``as`` it) and the node
+    (``node``; None until learned). Suites without addresses leave them None."""
 
     system: int | None = None
     entity: int | None = None
     node: int | None = None
+    other: int | None = None
+
+    def speaking_as(self, who: str | None) -> "Addressing":
+        """The addressing a step sends with: the session's (``who`` None) or its second system's (``"other"``)."""
+        return self if who is None else Addressing(self.other, self.entity, self.node, self.system)
 
     def from_node(self, wire, parsed) -> bool:
         """Whether something arrived from the node (true where the protocol has no addresses, or the node's id is

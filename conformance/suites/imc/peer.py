@@ -2,7 +2,9 @@
 unannounced sources (imc-wire.md, "IMC over UDP"). It announces its ``imc+udp://IP:PORT/`` service to the
 target and to the target host's discovery ports 30100-30104 every 10 s, heart-beats to the target at 1 Hz, learns the
 node's id from its first valid frame (unless given), and says the target is ready once a valid frame from
-it arrived (at once when its id is given: the seeds do not make Heartbeat periodic, erratum E7).
+it arrived (at once when its id is given: the seeds do not make Heartbeat periodic, erratum E7). It also announces
+a second system (``other``, named ``<name>-2``, on the same socket), the second client that scenarios about two
+clients on the link and about forwarding speak as.
 
 It also says which frames are for the session: replies are matched on the header, not on the socket they
 arrive at, because a node like DUNE sends what its UDP transport lists to every contact. Frames the session
@@ -31,6 +33,16 @@ def session_system(src: int | None, first_unique: int | None) -> int:
     return DEFAULT_SYSTEM if first_unique is None else SYSTEMS[first_unique % len(SYSTEMS)]
 
 
+def other_system(system: int, avoid: int | None = None) -> int:
+    """The session's second system (a second client on the link): the next id of ``SYSTEMS`` after the session's,
+    or the next id after a given one; never the node's (``avoid``), 0 or 0xFFFF."""
+    candidate = system
+    while True:
+        candidate = SYSTEMS[(SYSTEMS.index(candidate) + 1) % len(SYSTEMS)] if candidate in SYSTEMS else (candidate + 1) % 0xFFFF
+        if candidate not in (0, system, avoid):
+            return candidate
+
+
 class ImcPeer:
     def __init__(self, defs: Definitions, *, system: int, node: int | None, service: str, host: str, epoch,
                  name: str = "imc-conformance", chosen: bool = False):
@@ -38,6 +50,7 @@ class ImcPeer:
         ``epoch(t)``: seconds since 1970 at clock time t; ``chosen``: the id was chosen for the run, not given."""
         self.defs, self.system, self.node, self.service, self.host = defs, system, node, service, host
         self.epoch, self.name = epoch, name
+        self.other = other_system(system, node)  # the second client: announced under its own name, same socket
         self.notes = [f"the session's IMC id: {system:#06x} (chosen for this run; --src sets one)"] if chosen else []
         self.given = node is not None
         self.ready = self.given
@@ -64,20 +77,23 @@ class ImcPeer:
         return out
 
     def _announcements(self, t: float) -> list[tuple[object, bytes]]:
-        """The Announce, to the target and to its host's discovery ports (a node that was still starting when the
-        last one came, or forgot it, learns of the session from the next: DUNE takes Announces only there)."""
-        announce = self._announce(t)
-        return [(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]
+        """The Announces of both systems, to the target and to its host's discovery ports (a node that was still
+        starting when the last one came, or forgot it, learns of the session from the next: DUNE takes Announces
+        only there)."""
+        out = []
+        for announce in (self._announce(t), self._announce(t, second=True)):
+            out += [(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]
+        return out
 
     def accepts(self, parsed) -> bool:
         """Whether a frame is for the session (malformed frames are, so the byte-level checks see them)."""
         if parsed.decoded is None:
             return True
         header = parsed.decoded["header"]
-        return header["src"] != self.system and header["dst"] in (self.system, 0xFFFF, 0)
+        return header["src"] not in (self.system, self.other) and header["dst"] in (self.system, self.other, 0xFFFF, 0)
 
     def own(self, parsed) -> bool:
-        return parsed.decoded is not None and parsed.decoded["header"]["src"] == self.system
+        return parsed.decoded is not None and parsed.decoded["header"]["src"] in (self.system, self.other)
 
     def impostor(self, parsed) -> str | None:
         if parsed.decoded is None or parsed.message != "Announce" or not self.own(parsed):
@@ -87,7 +103,8 @@ class ImcPeer:
         if services == self.service:
             return None
         name = text_bytes(fields.get("sys_name", "")).decode("utf-8", "replace")
-        return f"an Announce with the session's id {self.system:#06x} came from {name!r} at {services[:120]!r}"
+        system = parsed.decoded["header"]["src"]
+        return f"an Announce with the session's id {system:#06x} came from {name!r} at {services[:120]!r}"
 
     def observe(self, t: float, parsed, from_target: bool) -> None:
         """Learn the node's id, and that it is ready, from its valid frames from the target's own address: not
@@ -96,19 +113,24 @@ class ImcPeer:
         if parsed.decoded is None or not from_target:
             return
         src = parsed.decoded["header"]["src"]
-        if self.node is None and src != self.system:
+        if self.node is None and src not in (self.system, self.other):
             self.node = src
         if src == self.node:
             self.ready = True
 
-    def _announce(self, t: float) -> bytes:
-        fields = {"sys_name": self.name, "sys_type": 0, "owner": 0xFFFF, "lat": 0.0, "lon": 0.0, "height": 0.0,
-                  "services": self.service}
-        return self._frame(t, "Announce", fields, dst=0)
+    def _announce(self, t: float, second: bool = False) -> bytes:
+        """The Announce of the session's system, or of its second: under its own name (DUNE keeps contacts by
+        name) and stamped a millisecond later (DUNE's discovery drops an Announce from an address whose last one
+        carried the same timestamp, whatever system it names)."""
+        fields = {"sys_name": f"{self.name}-2" if second else self.name, "sys_type": 0, "owner": 0xFFFF, "lat": 0.0,
+                  "lon": 0.0, "height": 0.0, "services": self.service}
+        return self._frame(t, "Announce", fields, dst=0, src=self.other if second else self.system,
+                           later=0.001 if second else 0.0)
 
     def _heartbeat(self, t: float) -> bytes:
         return self._frame(t, "Heartbeat", {}, dst=0xFFFF if self.node is None else self.node)
 
-    def _frame(self, t: float, abbrev: str, fields: dict, dst: int) -> bytes:
-        header = {"timestamp": self.epoch(t), "src": self.system, "src_ent": 0, "dst": dst, "dst_ent": 0xFF}
+    def _frame(self, t: float, abbrev: str, fields: dict, dst: int, src: int | None = None, later: float = 0.0) -> bytes:
+        header = {"timestamp": self.epoch(t) + later, "src": self.system if src is None else src, "src_ent": 0,
+                  "dst": dst, "dst_ent": 0xFF}
         return codec.encode(self.defs, {"abbrev": abbrev, "header": header, "fields": fields}, "le")

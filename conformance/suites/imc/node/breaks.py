@@ -36,6 +36,8 @@ BREAKS = {
     "stops-after-unknown-op": "after an LblConfig with an operation it does not know, LblConfig goes unanswered",
     "acks-unreachable": "an ABORT to a system not on the acoustic channel ends in ABORT_ACKED",
     "transmits-after-ttl": "an Iridium message is transmitted (TRANSMIT) 2 s after its time to live has passed",
+    "replies-to-first-client": "every reply goes to the first system that announced itself, whoever asked",
+    "never-forwards": "a RemoteCommand for another system on the link is kept, never resent to it (a SHOULD)",
     "resends-expired": "a stored RemoteCommand whose timeout passes while it is stored is still handed out",
     "leaks-on-drop": "after 5,000 datagrams it could not decode, no request is served (caught by --robustness)",
 }

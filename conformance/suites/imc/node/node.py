@@ -345,6 +345,19 @@ class ReferenceNode:
             return
         if as_float(f["timeout"]) > self.epoch0 + t or self.broken == "keeps-expired-commands":
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
+            self._forward(t)
+
+    def _forward(self, t: float) -> None:
+        """Resend the kept RemoteCommands whose recipient is a contact (as DUNE does over Wi-Fi, inside
+        HistoricData); the others stay kept for a QUERY's reply."""
+        if self.broken == "never-forwards":
+            return
+        for command in [c for c in self.kept if c["abbrev"] == "RemoteCommand" and c["fields"]["destination"] in self.contacts]:
+            self.kept.remove(command)
+            destination = command["fields"]["destination"]
+            data = {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": [command]}
+            frame = self._frame(t + PROCESSING, "HistoricData", data, dst=destination, ent=0)
+            self._later(t, PROCESSING, self.contacts[destination], frame)
 
     def _execute(self, t: float, command: dict) -> None:
         """Unpack a command for this node: handle it as a request from its original source."""
@@ -359,10 +372,11 @@ class ReferenceNode:
 
     def _reply(self, t: float, delay: float, request: dict, abbrev: str, fields: dict, entity: int = 0) -> None:
         header = request["header"]
-        address = self.contacts.get(header["src"])
+        src = next(iter(self.contacts), header["src"]) if self.broken == "replies-to-first-client" else header["src"]
+        address = self.contacts.get(src)
         if address is None:
             return
-        dst, dst_ent = (UNKNOWN_SYSTEM, UNKNOWN_ENTITY) if self.broken == "broadcast-replies" else (header["src"], header["src_ent"])
+        dst, dst_ent = (UNKNOWN_SYSTEM, UNKNOWN_ENTITY) if self.broken == "broadcast-replies" else (src, header["src_ent"])
         if self.broken == "late":
             delay += 30.0
         frame = self._frame(t + delay, abbrev, fields, dst=dst, ent=entity, dst_ent=dst_ent)
