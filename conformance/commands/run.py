@@ -27,7 +27,8 @@ def add(sub) -> None:
                                                       "imc+udp://HOST:PORT/ (IPv6 as udp://[::1]:PORT)")
     live.add_argument("--bind", metavar="HOST[:PORT]", help="where the session listens (default: loopback, any port)")
     live.add_argument("--src", type=system_id, default=None, metavar="ID",
-                      help="the session's own IMC id (default: one of 0x4C01-0x4CFE, chosen for the run)")
+                      help="the session's own IMC id (default: one of 0x4C01-0x4CFE, chosen for the run); its second "
+                           "client takes the next id")
     live.add_argument("--dst", type=system_id, default=None, metavar="ID",
                       help="the node's IMC id: start at once instead of waiting for a frame from the node")
     live.add_argument("--startup", type=startup_seconds, default=10.0, metavar="SECONDS",
