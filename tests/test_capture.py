@@ -286,6 +286,13 @@ def test_a_status_after_the_terminal_one_is_caught_at_the_level_of_its_rule():
     assert case.verdict is Verdict.NON_STRICT and "status=QUEUED after the terminal state (frame 2)" in case.checks[1].detail
 
 
+def test_a_request_ending_in_busy_is_a_reading_not_a_failure():
+    got = exchange((0, STATION, request()), (1, VEHICLE, status("BUSY")), end=30)
+    assert got[f"{EX}/terminal"].verdict is Verdict.PASS and f"{EX}/after-terminal" not in got
+    reading = got[f"{EX}/reading/busy-ends-request"]
+    assert reading.verdict is Verdict.IMPL_DEFINED and "read as the end of the request" in reading.checks[1].detail
+
+
 def test_busy_then_the_request_going_on_is_a_reading_not_a_failure():
     got = exchange((0, STATION, request()), (1, VEHICLE, status("BUSY")), (2, VEHICLE, status("IN_PROGRESS")),
                    (3, VEHICLE, status("SENT")), end=30)

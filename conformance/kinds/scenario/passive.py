@@ -261,6 +261,11 @@ class PassiveExchanges:
         if o.states is not None and o.terminal is None:
             return [self._finding(o, "terminal", LEVELS[weaker(ex["level"], o.states.level)], o.states.clause,
                                   f"no terminal {ex['reply']} within {bound:g} s", o.request)]
+        if o.open_end is not None:  # it ended in a state the seeds leave open: the reading, shown
+            named = self._name(o.terminal.message, o.states.field, o.terminal.fields.get(o.states.field))
+            return [self._finding(o, f"reading/{o.open_end}", Verdict.IMPL_DEFINED, o.states.clause,
+                                  f"ended in {o.states.field}={named}: read as the end of the request "
+                                  f"(open reading {o.open_end})", o.terminal)]
         return []
 
     # ------------------------------------------------------------ shared
