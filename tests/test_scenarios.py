@@ -353,3 +353,15 @@ def test_a_node_taking_another_reading_the_seeds_allow_gets_no_failure(suite, ca
     assert READINGS[variant] <= taken and taken - usual <= READINGS[variant], taken - usual
     register = suite.behaviour["ambiguities"]
     assert all(r in register for r in taken)
+
+
+def test_a_malformed_answer_to_the_request_decides_its_step_at_once(suite, cases):
+    """A node whose replies do not decode (big-endian with a little-endian CRC) but whose headers address the
+    scenario's requester: each step is decided when that reply comes, not after its bound and retries; the verdicts
+    are those the frames' own byte checks give."""
+    result, link = run_virtual(suite, cases, broken="big-endian-le-crc")
+    clean, clean_link = run_virtual(suite, cases)
+    assert link.now() <= 2 * clean_link.now()
+    case = next(c for c in result.cases if c.id == "imc/AcousticSystemsQuery/scenario/reply")
+    assert case.verdict is Verdict.FAIL and "is malformed: crc" in case.detail
+    assert verdicts(result)["imc/AcousticStatus/passive/AcousticRequest/scenario/range"] == "FAIL"

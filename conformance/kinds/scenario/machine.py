@@ -185,6 +185,8 @@ class Machine:
             step.malformed += not parsed.undecided
             step.unjudged += parsed.undecided
             self._log(t, "received", parsed, f"{'not judged' if parsed.undecided else 'malformed'}: {parsed.problem}")
+            if self._answers_malformed(step, parsed):
+                return self._answered_malformed(t, epoch, step, parsed)
             return []
         if any(parsed.data == d for d in step.seen):
             self._log(t, "duplicate", parsed, "a byte-identical copy of an earlier datagram (tolerated)")
@@ -548,6 +550,28 @@ class Machine:
         wanted = step.spec.get("expect") or step.spec.get("sequence")
         self._find(step, "", False, f"the {wanted} addressed to this request's requester echoes {echoed}",
                    rule["level"], rule["clause"])
+        step.until = None
+        return self._advance(t, epoch)
+
+    def _answers_malformed(self, step: _Step, parsed: Parsed) -> bool:
+        """Whether a frame that does not decode is what the step awaits: of the awaited message, before any valid
+        one, its header addressed to the requester of the step's request (else to this scenario's entity, or to
+        the system the step names); a frame the suite could not judge is not."""
+        if (step.kind not in ("expect", "sequence") or parsed.undecided or step.replies or step.until is None
+                or parsed.addressed is None):
+            return False
+        to, ref = tuple(parsed.addressed), step.spec.get("reply_to")
+        if ref is not None:
+            return to == self.sent_from[ref]
+        if "to" in step.spec:
+            return to[0] == self.addressing.speaking_as(step.spec["to"]).system
+        return to in self.sent_from.values()
+
+    def _answered_malformed(self, t: float, epoch: float, step: _Step, parsed: Parsed) -> list[Composed]:
+        """The node answered this scenario's request with a frame that does not decode: the step's outcome is
+        decided at once (the frame's own byte check fails it too), without waiting out its bound and retries."""
+        wanted = step.spec.get("expect") or step.spec.get("sequence")
+        self._find(step, "", False, f"the {wanted} addressed to this request's requester is malformed: {parsed.problem}")
         step.until = None
         return self._advance(t, epoch)
 

@@ -38,7 +38,8 @@ class Parsed:
     """One thing received. ``message``: its message name when known, even from a malformed frame's header;
     ``decoded``: its decoded form (``fields``, and ``header`` where the protocol has one) if well formed;
     ``problem`` and ``clause``: why it is malformed and the rule it breaks; ``undecided``: ``problem`` says why
-    the suite could not judge it (a bound it keeps), not what it breaks."""
+    the suite could not judge it (a bound it keeps), not what it breaks; ``addressed``: (system, entity) a frame
+    that did not decode is addressed to, where its header could still be read."""
 
     data: object
     message: str | None
@@ -47,6 +48,7 @@ class Parsed:
     clause: str | None = None
     encoding: str | None = None
     undecided: bool = False
+    addressed: tuple | None = None
 
     @property
     def fields(self) -> dict:

@@ -39,7 +39,8 @@ class ImcWire:
             decoded = codec.decode(self.defs, data)
         except FrameError as exc:
             return Parsed(data, self.named_in_header(data), None, f"{exc.rule} at byte {exc.offset}: {exc.detail}",
-                          self.rule_clauses.get(exc.rule), codec.byte_order_of(data))
+                          self.rule_clauses.get(exc.rule), codec.byte_order_of(data),
+                          addressed=self.addressed_in_header(data))
         except NotJudged as exc:
             return Parsed(data, self.named_in_header(data), None, f"{exc.reason} at byte {exc.offset}: {exc.detail}",
                           NOT_JUDGED_CLAUSE, codec.byte_order_of(data), undecided=True)
@@ -115,6 +116,13 @@ class ImcWire:
         (mgid,) = struct.unpack_from(codec.ORDERS[order] + "H", data, 2)
         mdef = self.defs.by_id.get(mgid)
         return mdef.abbrev if mdef is not None and not mdef.auxiliary else None
+
+    def addressed_in_header(self, data: bytes) -> tuple | None:
+        """(dst, dst_ent) a frame's header names, if it holds a whole header (even when the frame is malformed)."""
+        order = codec.byte_order_of(data)
+        if order is None or len(data) < codec.HEADER_SIZE:
+            return None
+        return struct.unpack_from(codec.ORDERS[order] + "HB", data, 17)
 
     def resolve(self, message: str, path: str, value, edition: str):
         field = self.defs[message].field(path)
