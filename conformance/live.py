@@ -1,24 +1,15 @@
 """What ``run`` needs for live cases (scenarios and the robustness phase), whatever the suite: the run's options
 checked against the suite's vocabulary, the notes a report gives on them, ``--dry-run``, ``list --scenarios``,
-and opening a ``--target`` with an optional ``--restart-cmd``."""
+and opening a ``--target`` with an optional ``--restart-cmd`` (``restart.py``)."""
 
 from __future__ import annotations
 
 import json
-import os
-import secrets
-import shlex
-import shutil
-import subprocess
-import threading
 from pathlib import Path
 
 from .kinds.scenario import options as vocabulary
-from .kinds.scenario.conductor import UNIQUE_SPAN
 from .escaping import printable
 
-RESTART_TIMEOUT = 120.0  # seconds a --restart-cmd may take
-TAIL_WAIT = 1.0  # seconds to read what a failed restart command wrote, when a node it started holds its stderr
 LIVE_FLAGS = ("target", "param", "allow_effects", "claims", "profile", "robustness", "restart_cmd", "replay_effects",
               "dry_run")
 
@@ -47,7 +38,9 @@ def options(args, suite, everything) -> dict:
            "robustness": args.robustness, "restart": bool(args.restart_cmd), "replay_effects": args.replay_effects,
            "corpus": tuple(c for c in everything if c.kind == "vector")}
     if args.restart_cmd is not None:
-        restart_argv(args.restart_cmd)
+        from .restart import restart_argv
+
+        restart_argv(args.restart_cmd)  # its program found before the run, not at the first bisection
     check_params(suite, everything, out["params"])
     if args.claims:
         from .inputs import read_json
@@ -143,70 +136,20 @@ def list_live_cases(suite, cases) -> int:
 def first_unique() -> int:
     """Where a run's request ids start: random, so that two runs on one node (or one after the other) do not answer
     to each other's numbers; recorded with the run, so that a replay finds the same."""
+    import secrets
+
+    from .kinds.scenario.conductor import UNIQUE_SPAN
+
     return secrets.randbelow(UNIQUE_SPAN)
 
 
 def open_target(args, suite, recorder=None):
     """The session with ``--target`` (its datagrams told to ``recorder``); ValueError with a one-line reason."""
-    restart = restarter(restart_argv(args.restart_cmd)) if args.restart_cmd is not None else None
+    restart = None
+    if args.restart_cmd is not None:
+        from .restart import restart_argv, restarter
+
+        restart = restarter(restart_argv(args.restart_cmd))
     return suite.open_target(args.target, bind=args.bind, src=args.src, dst=args.dst,
                              allow_group=args.allow_multicast, startup=args.startup, restart=restart,
                              recorder=recorder, first_unique=args.first_unique)
-
-
-def restart_argv(text: str) -> list[str]:
-    """The restart command's argv, its program found (a usage error now, not at the first bisection)."""
-    try:
-        argv = shlex.split(text)
-    except ValueError as exc:
-        raise ValueError(f"--restart-cmd cannot be split: {exc}") from None
-    if not argv:
-        raise ValueError("--restart-cmd is empty (an unset variable?): give the command that restarts the target")
-    program = argv[0]
-    found = (os.path.isfile(program) and os.access(program, os.X_OK)) if os.sep in program else shutil.which(program)
-    if not found:
-        raise ValueError(f"--restart-cmd: {printable(program)} is not a program that can be run"
-                         + ("" if os.sep in program else " (not found on PATH)"))
-    return argv
-
-
-class _Tail:
-    """The last bytes a stream carries, read by a thread until it ends: a restart command may leave the node it
-    started holding its stderr, which is then drained (never left to fill and block the node) for as long as the
-    node lives."""
-
-    KEEP = 4096
-
-    def __init__(self, stream):
-        self.data = b""
-        self.thread = threading.Thread(target=self._drain, args=(stream,), daemon=True)
-        self.thread.start()
-
-    def _drain(self, stream) -> None:
-        with stream:
-            for chunk in iter(lambda: stream.read1(65536), b""):
-                self.data = (self.data + chunk)[-self.KEEP:]
-
-
-def restarter(argv: list[str]):
-    """A function that runs the restart command (no shell, in a session of its own, bounded) and says why it
-    failed, or None. The command's exit is what counts: a node it starts in the background may hold its output."""
-    def restart() -> str | None:
-        try:
-            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                    start_new_session=True)
-        except OSError as exc:
-            return f"the restart command could not run: {exc.strerror or exc}"
-        tail = _Tail(proc.stderr)
-        try:
-            code = proc.wait(timeout=RESTART_TIMEOUT)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-            return f"the restart command did not end within {RESTART_TIMEOUT:g} s"
-        if code != 0:
-            tail.thread.join(TAIL_WAIT)  # at once when nothing it started holds its stderr
-            text = tail.data[-300:].decode("utf-8", "replace").strip()
-            return f"the restart command exited with {code}" + (f": {printable(text)}" if text else "")
-        return None
-    return restart

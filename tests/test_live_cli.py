@@ -15,7 +15,7 @@ import sys
 import pytest
 
 from imc_conformance.cli import main
-from imc_conformance.live import restart_argv, restarter
+from imc_conformance.restart import restart_argv, restarter
 
 PARAMS = ["--param", "peer=imc-peer-1", "--param", "beacon=b1", "--param", "sms_number=+351000000000",
           "--param", "remote_system=8208"]

@@ -6,6 +6,7 @@ import datetime as dt
 import gc
 import json
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import UsageError
@@ -94,9 +95,6 @@ def selected_groups(args) -> frozenset[str] | None:
 
 
 def command(args) -> int:
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
     from .. import live
     from ..core.runner import run_cases
     from ..core.session import AdapterStartError
@@ -141,12 +139,10 @@ def command(args) -> int:
         raise UsageError(str(exc)) from exc
     result = None
     try:
-        with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                      console=Console(stderr=True, emoji=False), transient=True, disable=args.no_progress) as bar:
-            task = bar.add_task("running", total=None)
+        with progress_bar(args.no_progress) as progress:
             result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
                                waivers=waivers, strict=args.strict, notes=notes + live.notes(args, options),
-                               progress=lambda n: bar.update(task, completed=n), options=options)
+                               progress=progress, options=options)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
     finally:
@@ -175,6 +171,22 @@ def command(args) -> int:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     return 2 if problems else result.exit_code()
+
+
+@contextmanager
+def progress_bar(off: bool):
+    """A callback the runner reports its progress to: a transient bar on standard error, or nothing (rich's progress
+    is imported only when shown)."""
+    if off:
+        yield None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=Console(stderr=True, emoji=False), transient=True) as bar:
+        task = bar.add_task("running", total=None)
+        yield lambda n: bar.update(task, completed=n)
 
 
 def open_recording(args, suite, cases, options):

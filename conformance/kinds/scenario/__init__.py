@@ -1,8 +1,16 @@
-"""The scenario case kind: behaviour over a live link, written as data and run by a sans-IO engine."""
+"""The scenario case kind: behaviour over a live link, written as data and run by a sans-IO engine. Its names are
+imported when first used (a run of byte vectors, or reading the vocabulary of live options, needs none of the
+engine)."""
 
-from .conductor import Conductor, Outgoing
-from .kind import ScenarioKind
-from .machine import Machine, Program
-from .wire import Addressing, Composed, Parsed, Wire
+from importlib import import_module
 
-__all__ = ["Addressing", "Composed", "Conductor", "Machine", "Outgoing", "Parsed", "Program", "ScenarioKind", "Wire"]
+_HOMES = {"Conductor": "conductor", "Outgoing": "conductor", "ScenarioKind": "kind", "Machine": "machine",
+          "Program": "machine", "Addressing": "wire", "Composed": "wire", "Parsed": "wire", "Wire": "wire"}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    if name not in _HOMES:
+        raise AttributeError(name)
+    return getattr(import_module(f".{_HOMES[name]}", __name__), name)
