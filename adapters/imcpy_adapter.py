@@ -206,6 +206,8 @@ class ImcpyAdapter:
                 return [self._inline_in(element) for element in value]
             return convert_list
         if f.is_float:
+            # For fp32 the f32 bit pattern is widened to a Python float (a double); that conversion quiets a
+            # signalling NaN, so such payloads cannot reach imcpy intact.
             width, bits, floats = f.size, _BITS[f.size], _FLOATS[f.size]
             return lambda value: floats.unpack(bits.pack(float_to_bits(value, width)))[0] if isinstance(value, str) else value
         return {"plaintext": text_bytes, "rawdata": raw_bytes, "message": self._inline_in}.get(f.type)
@@ -227,17 +229,7 @@ class ImcpyAdapter:
                                        f"({_first_line(exc)})") from exc
             return put_list
 
-        if f.is_float:
-            width, bits, floats = f.size, _BITS[f.size], _FLOATS[f.size]
-
-            def convert(value):
-                # For fp32 the f32 bit pattern is widened to a Python float (a double); that
-                # conversion quiets a signalling NaN, so such payloads cannot reach imcpy intact.
-                if isinstance(value, str):
-                    return floats.unpack(bits.pack(float_to_bits(value, width)))[0]
-                return value
-        else:
-            convert = {"plaintext": text_bytes, "rawdata": raw_bytes, "message": self._inline_in}.get(f.type)
+        convert = self._converter(f)
 
         def put(msg, value):
             try:

@@ -40,7 +40,8 @@ CAPTURE_FRAMES = 1_000_000
 LIVE_PARAMS = {"peer": "imc-peer-1", "beacon": "b1", "sms_number": "+351000000000", "remote_system": 8208}
 # (what, row, kind, bound, before): "s" and "ms": under the bound; "x": a ratio under the bound; a rate
 # ("cases/s", "frames/s"): at least the bound, from a row of seconds and COUNTS[row]. ``before``: the figure
-# measured before the start-up work (issue 20), or None.
+# measured before the start-up work, or None: issue 20's own measurements, but 5.8 (the README's benchmark table
+# before that work, commit c76295d) and 46.9 (this benchmark's protocol-time row at commit 181a770).
 TARGETS = (
     ("--version, whole process", "version", "ms", 100, 354),
     ("list, whole process", "list", "ms", 150, 458),

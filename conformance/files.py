@@ -13,8 +13,6 @@ import json
 from functools import cache
 from pathlib import Path
 
-import orjson
-
 from . import inputs
 from .cache import remembered
 from .errors import CorpusError
@@ -24,7 +22,7 @@ from .core.suite import Suite
 from .core.waivers import Waiver, WaiverError, waivers_in_force
 from .paths import VECTORS
 from .suites import load_suite
-from .suites.data_suite import manifest, trusted
+from .suites.data_suite import manifest, read_document
 
 
 @cache
@@ -120,18 +118,10 @@ def read_cases(suite: Suite, folders: tuple[tuple[str, str], ...], bare: Path | 
 def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
     """The cases of one file: a packaged file as the generator recorded it is taken as it is; any other is read
     bounded and checked (schema, then every case against the definitions)."""
-    try:
-        raw = inputs.read_bytes(path)
-    except ValueError as exc:
-        raise CorpusError(str(exc)) from None
-    if trusted(path, raw, suite.packaged):
-        doc = orjson.loads(raw)
+    raw, doc, vouched = read_document(path, suite.packaged)
+    if vouched:
         group = suite.group_of(doc)
         return [Case(data["id"], group, kind, data) for data in doc["cases"]]
-    try:
-        doc = inputs.parse_json(raw, str(path))
-    except ValueError as exc:
-        raise CorpusError(str(exc)) from None
     problem = schema_error(suite.schema(kind), doc, str(path), memo=raw)
     if problem:
         raise CorpusError(problem)

@@ -349,6 +349,7 @@ def test_a_node_taking_another_reading_the_seeds_allow_gets_no_failure(suite, ca
     assert {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED)} == {}
     taken = {k.check.split(":reading-", 1)[1] for c in result.cases for k in c.checks if ":reading-" in k.check}
     reference, _ = run_virtual(suite, cases, edition)
+    assert [c.timeline for c in result.cases] != [c.timeline for c in reference.cases]  # the variant took effect
     usual = {k.check.split(":reading-", 1)[1] for c in reference.cases for k in c.checks if ":reading-" in k.check}
     assert READINGS[variant] <= taken and taken - usual <= READINGS[variant], taken - usual
     register = suite.behaviour["ambiguities"]

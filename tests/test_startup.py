@@ -96,6 +96,43 @@ def test_merged_shards_are_the_whole_run(tmp_path, capsys):
     assert "is not a shard" in capsys.readouterr().err
 
 
+def test_a_shard_count_beyond_the_bound_is_one_line_not_a_hang(tmp_path, capsys):
+    """A saved result claiming 10**12 shards (by hand, or a hostile file): refused when read, never a merge that
+    lists every shard it would need."""
+    from imc_conformance.cli import main
+    from imc_conformance.core.shards import merge
+    from imc_conformance.files import read_result
+    from imc_conformance.limits import SHARDS_MAX
+
+    from imc_conformance.paths import VECTORS
+
+    schema = json.loads((VECTORS / "schema" / "result.schema.json").read_text(encoding="utf-8"))
+    assert schema["properties"]["shard"]["properties"]["of"]["maximum"] == SHARDS_MAX
+    parts = []
+    for k in (1, 2):
+        path = tmp_path / f"s{k}.json"
+        main(["run", "--adapter", "imcpy", "--no-progress", "--message", "LblRange", "--shard", f"{k}/2", "--json",
+              str(path)])
+        doc = json.loads(path.read_text())
+        doc["shard"]["of"] = 10**12
+        path.write_text(json.dumps(doc))
+        parts.append(path)
+    capsys.readouterr()
+    assert main(["report", "--merge", *map(str, parts)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "maximum" in err
+    results = []
+    for path in parts:
+        doc = json.loads(path.read_text())
+        doc["shard"]["of"] = 2
+        path.write_text(json.dumps(doc))
+        results.append(read_result(path))
+    for r in results:
+        r.shard = (r.shard[0], 10**12)
+    with pytest.raises(ValueError, match="split into 2 to"):
+        merge(results, [], {})
+
+
 def test_the_pytest_plugin_gives_the_same_outcomes_under_xdist(tmp_path):
     pytest.importorskip("xdist")
     outcomes = {}

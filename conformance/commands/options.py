@@ -9,7 +9,7 @@ import ipaddress
 import math
 from pathlib import Path
 
-from ..limits import STARTUP_MAX, TIME_SCALE_MAX
+from ..limits import SHARDS_MAX, STARTUP_MAX, TIME_SCALE_MAX
 from ..suites import names as suite_names
 
 REPORTS = ("json", "junit", "markdown", "html")
@@ -75,10 +75,21 @@ def address(text: str) -> str | int:
     return value
 
 
+def chosen_edition(suite, given: str | None) -> str:
+    """The edition a command works in: the one given (a usage error if the suite has none such), else the suite's
+    first."""
+    from ..errors import UsageError
+
+    edition = given or suite.editions[0]
+    if edition not in suite.editions:
+        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
+    return edition
+
+
 def shard(text: str) -> tuple[int, int]:
     """K/N: the Kth of N shards (1 <= K <= N, N >= 2)."""
     k, sep, n = text.partition("/")
-    if not sep or not k.isdigit() or not n.isdigit() or not 2 <= int(n) <= 10_000 or not 1 <= int(k) <= int(n):
+    if not sep or not k.isdigit() or not n.isdigit() or not 2 <= int(n) <= SHARDS_MAX or not 1 <= int(k) <= int(n):
         raise argparse.ArgumentTypeError(f"{text!r}: give K/N, the Kth of N shards (e.g. 1/4)")
     return int(k), int(n)
 
@@ -89,14 +100,28 @@ def port(text: str) -> int:
     return int(text)
 
 
-def offset_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r}: give seconds from the capture's first record (0 or more)")
-    return value
+def listen_port(text: str) -> int:
+    """A UDP port to listen on, 0 meaning any free one."""
+    if not text.isdigit() or int(text) > 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: a port is 0 to 65535")
+    return int(text)
+
+
+def real(accept, complaint: str):
+    """An argparse type: a number ``accept(value)`` takes (NaN never), else ``complaint`` about the text."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if math.isnan(value) or not accept(value):
+            raise argparse.ArgumentTypeError(f"{text!r}: {complaint}")
+        return value
+    return parse
+
+
+offset_seconds = real(lambda v: 0 <= v < math.inf, "give seconds from the capture's first record (0 or more)")
+probability = real(lambda v: 0 <= v < 1, "give a share between 0 and 1")
 
 
 # ---------------------------------------------------------------- option groups

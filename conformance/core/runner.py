@@ -14,7 +14,7 @@ from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, RunResult, message_verdict
 from .session import Answer, Job, Session
 from .suite import Suite
-from .verdicts import FAILING, SEVERITY, Verdict, failing, worst
+from .verdicts import Verdict, failing, worst
 from .waivers import Waiver
 
 
@@ -109,23 +109,18 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     notes += why + list(getattr(session, "notes", ()))
     waivers = waivers or {}
     filed: dict[str, list[CaseResult]] = defaultdict(list)
-    severity, pass_ = SEVERITY.__getitem__, Verdict.PASS
     for case in cases:
         found = judges[case.id][2]
         elsewhere = [r for r in found if r.filed_under is not None]
         checks = [r for r in found if r.filed_under is None] if elsewhere else found
         if case.id not in timelines and len(checks) > 1:
             checks = sorted(checks, key=_check_name)
-        if len(checks) == 1:
-            verdict = checks[0].verdict
-        else:
-            verdicts = {r.verdict for r in checks}
-            verdict = pass_ if verdicts == {pass_} else min(verdicts, key=severity, default=Verdict.UNSUPPORTED)
+        verdict = checks[0].verdict if len(checks) == 1 else worst({r.verdict for r in checks})
         waiver = waivers.get(case.id)
         if waiver is not None:
             verdict = Verdict.WAIVED if failing(verdict, strict=True) else Verdict.WAIVER_STALE
         explained = (suite.implementation_errata(case.id, errata, case.data.get("tags", ()))
-                     if verdict in FAILING else [])
+                     if failing(verdict, strict=False) else [])
         data = case.data
         filed[case.group].append(CaseResult(case.id, case.group, verdict, expectation(data, edition),
                                             data["clause"], checks, data.get("rule"), explained,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from .results import MessageResult, RunResult, message_verdict
 
+SHARDS_MAX = 10_000  # shards a selection may be split into (limits.py lists it with the other bounds)
 SAME = ("suite", "title", "edition", "implementation", "adapter", "strict")  # what the shards of one run share
 
 
@@ -21,6 +22,8 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
             if getattr(r, key) != getattr(first, key):
                 raise ValueError(f"the shards differ in {key}: {getattr(first, key)!r} and {getattr(r, key)!r}")
     n = first.shard[1]
+    if not 2 <= n <= SHARDS_MAX:
+        raise ValueError(f"a run of {n} shards: a selection is split into 2 to {SHARDS_MAX}")
     indices = sorted(r.shard[0] for r in results)
     if any(r.shard[1] != n for r in results) or len(set(indices)) != len(indices):
         raise ValueError(f"the shards are not each of one run of {n}: {', '.join(f'{r.shard[0]}/{r.shard[1]}' for r in results)}")

@@ -26,11 +26,6 @@ def _call(fn, *args, acknowledge: bool = False, **kwargs) -> Answer:
         return Answer("unsupported", reason=str(exc))
     except Exception as exc:  # an adapter bug must never pass a case
         return Answer("adapter-error", reason=f"{type(exc).__name__}: {exc}")
-    kind = result.__class__
-    if kind is dict:
-        return Answer("ok", message=result)
-    if kind is bytes:
-        return Answer("ok", frame=result)
     if acknowledge and result is None:
         return Answer("ok", message={})
     if isinstance(result, dict):

@@ -45,8 +45,6 @@ from __future__ import annotations
 
 import json
 import os
-
-import orjson
 import queue
 import resource
 import signal
@@ -57,6 +55,8 @@ from collections import deque
 from dataclasses import dataclass
 from itertools import count
 from typing import Iterable, Iterator
+
+import orjson
 
 from ..core.results import Incident
 from ..inputs import nesting_problem

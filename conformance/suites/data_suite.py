@@ -16,15 +16,19 @@ from pathlib import Path
 import orjson
 
 from ..core.suite import Suite
+from ..inputs import parse_json, read_bytes
 
 MANIFEST = "manifest.json"
 
 
 @cache
 def manifest(packaged: Path) -> dict[str, dict]:
-    """The packaged folder's manifest: file (relative path) -> {"sha256", and for case files "group", "kind"}."""
-    path = packaged / MANIFEST
-    return orjson.loads(path.read_bytes())["files"] if path.exists() else {}
+    """The packaged folder's manifest: file (relative path) -> {"sha256", and for case files "group", "kind"}; empty
+    (every file checked) where there is none or it cannot be read."""
+    try:
+        return orjson.loads(read_bytes(packaged / MANIFEST))["files"]
+    except (ValueError, LookupError, TypeError):  # missing, unreadable, not JSON, not a manifest
+        return {}
 
 
 def trusted(path: Path, raw: bytes, packaged: Path) -> bool:
@@ -32,26 +36,34 @@ def trusted(path: Path, raw: bytes, packaged: Path) -> bool:
     if not path.is_relative_to(packaged):
         return False
     entry = manifest(packaged).get(path.relative_to(packaged).as_posix())
-    return entry is not None and entry["sha256"] == hashlib.sha256(raw).hexdigest()
+    return isinstance(entry, dict) and entry.get("sha256") == hashlib.sha256(raw).hexdigest()
+
+
+def read_document(path: Path, packaged: Path) -> tuple[bytes, object, bool]:
+    """A data or case file's bytes (read bounded), its JSON value, and whether the packaged manifest vouches for it
+    (then it needs no check); CorpusError for a file that cannot be read or is not JSON."""
+    from ..errors import CorpusError
+
+    try:
+        raw = read_bytes(path)
+        if trusted(path, raw, packaged):
+            return raw, orjson.loads(raw), True
+        return raw, parse_json(raw, str(path)), False
+    except ValueError as exc:
+        raise CorpusError(str(exc)) from None
 
 
 def read_data_file(path: Path, schema: str | None, packaged: Path):
-    """The JSON document of a suite's data file: as it is when packaged and unchanged, else bounded and checked
-    against ``schema`` (a file of vectors/schema); CorpusError naming the file and the JSON path of a problem."""
-    if path.is_relative_to(packaged):
-        raw = path.read_bytes()
-        if trusted(path, raw, packaged):
-            return orjson.loads(raw)
+    """The JSON document of a suite's data file: as it is when packaged and unchanged, else checked against
+    ``schema`` (a file of vectors/schema); CorpusError naming the file and the JSON path of a problem."""
+    _, doc, vouched = read_document(path, packaged)
+    if vouched or not schema:
+        return doc
     from ..errors import CorpusError
     from ..files import schema_error
-    from ..inputs import read_json
     from ..paths import VECTORS
 
-    try:
-        _, doc = read_json(path)
-    except ValueError as exc:
-        raise CorpusError(str(exc)) from None
-    problem = schema_error(VECTORS / "schema" / schema, doc, str(path)) if schema else None
+    problem = schema_error(VECTORS / "schema" / schema, doc, str(path))
     if problem:
         raise CorpusError(problem)
     return doc

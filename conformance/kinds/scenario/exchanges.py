@@ -81,9 +81,10 @@ def states_for(wire, exchange: dict, request: dict, edition: str) -> States | No
     by = state.get("by_request")
     if by is not None:
         message = exchange["request"]["message"]
+        value = request.get(by["field"])
         for name, override in by["values"].items():
-            if same(request.get(by["field"]), next(iter(resolved(wire, message, by["field"], [name], edition)), None)):
-                chosen.update(override)
+            if any(same(value, v) for v in resolved(wire, message, by["field"], [name], edition)):
+                chosen.update(override)  # (a name the edition lacks resolves to nothing and selects nothing)
                 break
 
     def values(names) -> frozenset:

@@ -110,6 +110,7 @@ class _Step:
     bound: float | None = None  # when the step's own time is up (a quiet period after a terminal state may move until)
     open_end: str | None = None  # the ambiguity id when the sequence's last state is one the seeds leave open
     readings: dict = field(default_factory=dict)  # ambiguity id -> what the node did that the seeds leave open
+    states: tuple = ()  # (the States of its replies, or None), once worked out
 
 
 class Machine:
@@ -411,11 +412,12 @@ class Machine:
                 and self.addressing.from_node(self.wire, parsed))
 
     def _states(self, step: _Step) -> States | None:
-        """The states of the replies the step awaits, for the request it answers."""
-        exchange = self._exchange(step)
-        if exchange is None:
-            return None
-        return states_for(self.wire, exchange, self.sent[step.spec["reply_to"]].decoded.get("fields", {}), self.edition)
+        """The states of the replies the step awaits, for the request it answers (worked out once a step)."""
+        if not step.states:
+            exchange = self._exchange(step)
+            step.states = (None if exchange is None else states_for(
+                self.wire, exchange, self.sent[step.spec["reply_to"]].decoded.get("fields", {}), self.edition),)
+        return step.states[0]
 
     def _exchange(self, step: _Step) -> dict | None:
         ref = step.spec.get("reply_to")

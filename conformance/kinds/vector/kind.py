@@ -72,6 +72,9 @@ class VectorCodec(Protocol):
         """How an answered description of a type differs from the expected one."""
 
 
+VALID_PASS = {"decode": "decoded as expected", "encode": "frame matches", "roundtrip": "re-encoded to the same frame"}
+
+
 @dataclass
 class _Compiled:
     """A case as a run needs it, worked out once per edition."""
@@ -146,19 +149,19 @@ class VectorKind:
             op = request.op
             if op == "decode":
                 if compiled.canonical is not None and _canonical(answer.message) == compiled.canonical:
-                    return self._pass(request.check, "decoded as expected")
+                    return self._pass(request.check, op)
             elif op != "describe" and answer.frame == compiled.frames.get(request.encoding):
-                return self._pass(request.check, "frame matches" if op == "encode" else "re-encoded to the same frame")
+                return self._pass(request.check, op)
         result = self._judge(case, compiled, edition, request, answer)
         if answer.note:
             result.note = answer.note
         return result
 
-    def _pass(self, check: str, detail: str) -> CheckResult:
-        """The PASS of a check (its name says its operation, and so its detail)."""
+    def _pass(self, check: str, op: str) -> CheckResult:
+        """The PASS of a valid case's check, shared (its name says its operation, and so its detail)."""
         found = self._passes.get(check)
         if found is None:
-            found = self._passes[check] = CheckResult(check, Verdict.PASS, detail)
+            found = self._passes[check] = CheckResult(check, Verdict.PASS, VALID_PASS[op])
         return found
 
     def _judge(self, case: dict, compiled: _Compiled, edition: str, request: Request, answer: Answer) -> CheckResult:
@@ -204,11 +207,11 @@ class VectorKind:
             return CheckResult(check, Verdict.FAIL, f"refused a valid {request.op}: {answer.reason}")
         if request.op == "decode":
             return (self._decoded_wrongly(case, compiled, edition, request, answer, "")
-                    or CheckResult(check, Verdict.PASS, "decoded as expected"))
+                    or CheckResult(check, Verdict.PASS, VALID_PASS["decode"]))
         expected = compiled.frames[request.encoding]
         if answer.frame != expected:
             return self.failure(case, edition, request, "", expected, answer.frame, locate=True)
-        return CheckResult(check, Verdict.PASS, "frame matches" if request.op == "encode" else "re-encoded to the same frame")
+        return CheckResult(check, Verdict.PASS, VALID_PASS[request.op])
 
     def _invalid(self, case, request, answer) -> CheckResult:
         check, rule = request.check, case["rule"]

@@ -16,14 +16,13 @@ def add(sub) -> None:
 
 
 def command(args) -> int:
+    from ...commands.options import chosen_edition
     from ...errors import UsageError
     from . import load
     from .package_files import write_package
 
     suite = load()
-    edition = args.edition or suite.editions[0]
-    if edition not in suite.editions:
-        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
+    edition = chosen_edition(suite, args.edition)
     try:
         written, left_out = write_package(suite.defs.edition(edition), args.folder, args.replace)
     except ValueError as exc:

@@ -8,6 +8,7 @@ import socket
 import sys
 import time
 
+from ....commands.options import chosen_edition, listen_port, probability
 from .breaks import BREAKS, VARIANTS
 
 
@@ -17,7 +18,7 @@ def add_command(sub) -> None:
                                        "acoustic channel and fake Iridium/SMS gateways. It answers only systems that "
                                        "announce an imc+udp service to it, and announces by unicast only.")
     serve.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
-    serve.add_argument("--port", type=port_number, default=6002, help="UDP port (default 6002, DUNE's; 0: any free)")
+    serve.add_argument("--port", type=listen_port, default=6002, help="UDP port (default 6002, DUNE's; 0: any free)")
     serve.add_argument("--system", default="imc-reference/0x00A0", metavar="NAME/ID",
                        help="the node's name and IMC id (default imc-reference/0x00A0)")
     serve.add_argument("--peer", action="append", default=[], metavar="NAME[:METRES]",
@@ -34,24 +35,6 @@ def add_command(sub) -> None:
                        help="a correct node taking another reading the seeds allow (vectors/imc/ambiguities.json): "
                             + "; ".join(f"{k}: {v}" for k, v in VARIANTS.items()))
     serve.set_defaults(func=command_serve)
-
-
-def port_number(text: str) -> int:
-    if not text.isdigit() or int(text) > 65535:
-        import argparse
-        raise argparse.ArgumentTypeError(f"{text!r}: a port is 0 to 65535")
-    return int(text)
-
-
-def probability(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not 0.0 <= value < 1.0:
-        import argparse
-        raise argparse.ArgumentTypeError(f"{text!r}: give a share between 0 and 1")
-    return value
 
 
 def parse_system(text: str) -> tuple[str, int]:
@@ -87,9 +70,7 @@ def command_serve(args) -> int:
     from .node import ReferenceNode
 
     suite = load()
-    edition = args.edition or suite.editions[0]
-    if edition not in suite.editions:
-        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
+    edition = chosen_edition(suite, args.edition)
     try:
         name, system = parse_system(args.system)
         peers = parse_peers(args.peer)
