@@ -9,7 +9,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test generate benchmark dune dune-conformance
+.PHONY: conformance test generate benchmark dune dune-conformance matrix mutants
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -18,6 +18,25 @@ test: $(VENV)/.installed
 
 generate: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance generate
+
+# Every implementation the project installs side by side (a failing run is a column, not an error), with the DUNE
+# recording in tests/data judged as a capture; then the suite's power (the seeded bugs caught by corpus and fuzzer).
+MATRIX = reports/matrix
+matrix: $(VENV)/.installed
+	mkdir -p $(MATRIX)
+	for a in imcpy pyimclsts imcpy-shim pyimclsts-shim; do \
+	  $(VENV)/bin/imc-conformance run --adapter $$a --no-progress --json $(MATRIX)/$$a.json > /dev/null; done; true
+	for a in rosbags genpy; do \
+	  $(VENV)/bin/imc-conformance run --suite ros_acomms --adapter $$a --no-progress --json $(MATRIX)/$$a.json > /dev/null; done; true
+	$(VENV)/bin/imc-conformance pcap tests/data/dune-seed.pcapng --json $(MATRIX)/dune-recording.json > /dev/null; true
+	$(VENV)/bin/imc-conformance matrix imcpy=$(MATRIX)/imcpy.json pyimclsts=$(MATRIX)/pyimclsts.json \
+	  imcpy-shim=$(MATRIX)/imcpy-shim.json pyimclsts-shim=$(MATRIX)/pyimclsts-shim.json \
+	  "DUNE (recording)=$(MATRIX)/dune-recording.json" rosbags=$(MATRIX)/rosbags.json genpy=$(MATRIX)/genpy.json \
+	  --markdown reports/matrix.md --html reports/matrix.html
+
+mutants: $(VENV)/.installed
+	$(VENV)/bin/imc-conformance mutants
+	$(VENV)/bin/imc-conformance mutants --suite ros_acomms
 
 benchmark: $(VENV)/.installed
 	$(VENV)/bin/python -m imc_conformance.benchmark

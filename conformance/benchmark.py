@@ -15,7 +15,10 @@ target with ``met`` or ``MISSED`` and the figure measured before the start-up wo
   case (the slow anchor, sampled);
 - live: the IMC scenario set against the reference node over loopback UDP, whole process, and in protocol time
   (virtual: exactly the waits a live run makes) against it and every broken node; once, the robustness phase;
-- capture: ``imc-conformance pcap`` on a generated capture of a million frames, whole command, and reading alone.
+- capture: ``imc-conformance pcap`` on a generated capture of a million frames, whole command, and reading alone;
+- fuzzing (once each): generated messages against imcpy through hypothesis, the frame-mutation sweep against imcpy
+  (beside imcpy's bare decode of such frames), the differential run of imcpy and pyimclsts (1,000 examples per
+  message, whole process) and the mutants of both suites.
 """
 
 from __future__ import annotations
@@ -59,6 +62,12 @@ TARGETS = (
     ("subprocess, imcpy shim, one request per line", "subprocess per line", "cases/s", 8_000, 7_579),
     ("capture judged, whole command", "capture", "frames/s", 150_000, 61_614),
     ("slowest broken node vs the reference node, scenario set (protocol time)", "live ratio", "x", 2.0, 46.9),
+    ("fuzz: generated round-trips against imcpy in-process, through hypothesis", "fuzz hypothesis", "examples/s", 500,
+     None),
+    ("fuzz: frame-mutation sweep of corpus frames against imcpy in-process", "fuzz sweep", "frames/s", 20_000, None),
+    ("fuzz: differential, 1,000 examples per message, imcpy vs pyimclsts, whole process", "fuzz differential", "s",
+     300, None),
+    ("mutants of both suites, corpus and fuzzer", "mutants", "s", 180, None),
 )
 COUNTS: dict[str, int] = {}  # cases or frames of the rate rows, filled as they are measured
 
@@ -70,7 +79,7 @@ def target_lines(medians: dict[str, float]) -> list[str]:
         if row not in medians:
             continue
         value = medians[row]
-        if kind in ("cases/s", "frames/s"):
+        if kind in ("cases/s", "frames/s", "examples/s"):
             value = COUNTS[row] / value
             met, shown, goal = value >= bound, f"{value:,.0f} {kind}", f">= {bound:,} {kind}"
             was = f"{before:,} {kind}" if before else None
@@ -395,12 +404,63 @@ def capture_rows(suite, repeat: int) -> dict[str, float]:
     return out
 
 
+def fuzz_rows(suite, everything) -> dict[str, float]:
+    """The fuzzer's throughput (once each: hypothesis's search is sequential and seeded) and the mutants' time."""
+    import imcpy
+
+    from .adapters.imcpy_adapter import adapter
+    from .fuzz.engine import Search
+    from .fuzz.mutation import score
+    from .sessions.library import LibrarySession
+
+    source = suite.fuzz_source(EDITION, everything)
+    sessions = {"imcpy": LibrarySession(adapter(), "imcpy")}
+    search = Search(suite, source, sessions, EDITION, seed=0, budget=100)
+    out = {"fuzz hypothesis": timed(lambda: search.run(source.groups, ("message",)))}
+    COUNTS["fuzz hypothesis"] = sum(search.tally.judged.values())
+    sweep = Search(suite, source, sessions, EDITION, seed=0, budget=1)
+    out["fuzz sweep"] = timed(lambda: sweep.sweep(source.groups, 2000))
+    COUNTS["fuzz sweep"] = sum(sweep.tally.judged.values())
+    rng = __import__("random").Random(0)
+    frames = [source.mutate(g, f, e, rng.choice(source.mutations), rng.randrange(1 << 16), rng.randrange(1 << 16))
+              for g in source.groups for e, f in source.seed_frames(g)]
+
+    def bare():
+        for frame in frames:
+            try:
+                imcpy.Packet.deserialize(frame)
+            except RuntimeError:
+                pass
+    out["imcpy bare decode"] = timed(bare) / len(frames)
+    out["fuzz sweep ratio"] = out["fuzz sweep"] / COUNTS["fuzz sweep"] / out["imcpy bare decode"]
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "imc_conformance.cli", "fuzz", "--adapter", "imcpy", "--adapter", "pyimclsts",
+                    "--seed", "0", "--budget", "500"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                   env=command_env(), cwd=tempfile.gettempdir(), check=False)
+    out["fuzz differential"] = time.perf_counter() - start
+    start = time.perf_counter()
+    for name in ("imc", "ros_acomms"):
+        s, cases = open_corpus(name)
+        edition = s.editions[0]
+        vectors = [c for c in cases if c.kind == "vector"]
+        source = s.fuzz_source(edition, cases)
+        for mutant in s.mutants(edition):
+            score(s, mutant, vectors, edition, source, seed=0, budget=40)
+    out["mutants"] = time.perf_counter() - start
+    print(f"fuzz: {COUNTS['fuzz hypothesis']} generated examples against imcpy in {out['fuzz hypothesis']:.1f} s "
+          f"({COUNTS['fuzz hypothesis'] / out['fuzz hypothesis']:,.0f}/s); sweep {COUNTS['fuzz sweep']} frames in "
+          f"{out['fuzz sweep']:.2f} s ({COUNTS['fuzz sweep'] / out['fuzz sweep']:,.0f} frames/s, "
+          f"{out['fuzz sweep ratio']:.1f}x imcpy's bare decode); differential imcpy vs pyimclsts, 1,000 examples per "
+          f"message: {out['fuzz differential']:.0f} s; mutants of both suites: {out['mutants']:.0f} s")
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m imc_conformance.benchmark", description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--json", metavar="FILE", help="also write every median and target as JSON")
-    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture"):
+    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "fuzz"):
         parser.add_argument(f"--skip-{part}", action="store_true")
     args = parser.parse_args(argv)
 
@@ -420,6 +480,8 @@ def main(argv: list[str] | None = None) -> int:
         medians |= live_rows(suite, everything, args.repeat, not args.skip_robustness)
     if not args.skip_capture:
         medians |= capture_rows(suite, min(args.repeat, 3))
+    if not args.skip_fuzz:
+        medians |= fuzz_rows(suite, everything)
     installed.cleanup()
     lines = target_lines(medians)
     print("\n".join(lines))

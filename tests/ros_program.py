@@ -10,7 +10,7 @@ import json
 import struct
 import sys
 
-import ros_mutants
+from imc_conformance.suites.ros_acomms import mutants as ros_mutants
 
 from imc_conformance.adapter_api import Rejected
 

@@ -424,10 +424,10 @@ def test_damaged_pcapng_blocks_are_errors_not_tracebacks():
     ("NoCrcCheck", {"PASS", "FAIL"}),  # a mutant that accepts the frames whose CRC is wrong
 ])
 def test_captured_frames_replayed_through_an_implementation(adapter, verdicts_, tmp_path, capsys):
-    if adapter != "imcpy":  # a mutant of tests/mutants.py, made over the definitions
+    if adapter != "imcpy":  # a mutant of suites/imc/mutants.py, made over the definitions
         (tmp_path / "mutant.py").write_text(
             f"import sys\nsys.path.insert(0, {str(__import__('pathlib').Path(__file__).parent)!r})\n"
-            f"from mutants import {adapter}\nfrom imc_conformance.suites import load_suite\n"
+            f"from imc_conformance.suites.imc.mutants import {adapter}\nfrom imc_conformance.suites import load_suite\n"
             f"adapter = {adapter}(load_suite('imc').defs)\n")
         adapter = f"{tmp_path / 'mutant.py'}:adapter"
     write_capture(tmp_path / "c.pcap", DEFS, SUITE.wire, EDITION, 600, damaged=0.1)

@@ -32,7 +32,7 @@ def unexplained(suite, verdicts, implementation):
 def stale_globs(suite, verdicts, implementation):
     failing = [cid for cid, (v, _) in verdicts.items() if v not in PASSING]
     return [(e["id"], g) for e in suite.errata if e.get("implementation") == implementation
-            for g in e["cases"] if not fnmatch.filter(failing, g)]
+            for g in e.get("cases", ()) if not fnmatch.filter(failing, g)]
 
 
 @pytest.fixture(scope="module")

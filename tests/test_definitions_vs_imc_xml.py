@@ -278,6 +278,11 @@ def test_no_xml_message_id_above_highest_imc_id(xml, xml_messages):
     assert len(xml.findall("message")) == len(xml_messages) > 300  # ids are unique; the whole file was read
 
 
+def test_ids_elsewhere_are_exactly_the_xml_messages_the_definitions_lack(xml_messages):
+    """The fuzzer leaves a frame carrying one of these unjudged: a receiver of the whole protocol decodes it."""
+    assert DEFS["frame"]["ids_elsewhere"]["values"] == sorted(set(xml_messages) - set(OURS))
+
+
 def test_unknown_id_999_is_unused_in_xml(xml_messages):
     assert UNUSED_ID == 999
     assert UNUSED_ID not in xml_messages, f"IMC.xml defines {UNUSED_ID}: {xml_messages[UNUSED_ID].get('abbrev')}"

@@ -10,6 +10,7 @@ import sys
 from collections import Counter
 from pathlib import Path
 
+from imc_conformance.suites.ros_acomms import mutants as ros_mutants
 from imc_conformance.cli import main
 from imc_conformance.files import open_corpus
 from imc_conformance.suites.ros_acomms.corpus.build import build_corpus
@@ -77,7 +78,7 @@ def test_an_adapter_that_allocates_what_a_hostile_length_claims_crashes_alone(tm
     assert "MemoryError" in doc["stderr"]
 
 
-class WrongTypes(__import__("ros_mutants").Reference):
+class WrongTypes(ros_mutants.Reference):
     """Answers Packet decodes as an unknown type, and CST decodes as another type of the package."""
 
     name = "wrong-types"
@@ -111,7 +112,7 @@ class WithoutDescribe:
     """The reference's encode and decode, without a describe operation."""
 
     def __init__(self):
-        self.inner = __import__("ros_mutants").Reference()
+        self.inner = ros_mutants.Reference()
         self.hello, self.encode, self.decode = self.inner.hello, self.inner.encode, self.inner.decode
 
 

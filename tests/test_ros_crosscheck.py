@@ -12,7 +12,7 @@ import collections
 from functools import cache
 
 import pytest
-import ros_mutants
+from imc_conformance.suites.ros_acomms import mutants as ros_mutants
 from harness import verdicts
 
 from imc_conformance.core.cases import expectation

@@ -22,7 +22,7 @@ SCHEMA_DIR = VECTORS / "schema"
 ROS_SCHEMAS = ("ros_acomms-definitions", "ros_acomms-vectors", "ros_acomms-errata", "ros_acomms-examples")
 SCHEMA_NAMES = ("definitions", "vectors", "rules", "errata", "examples", "scenarios", "robustness", "exchanges",
                 "profile", "statements", "manifest", "ambiguities",
-                *ROS_SCHEMAS, "waivers", "result")
+                *ROS_SCHEMAS, "waivers", "result", "promoted")
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
 IMC = VECTORS / "imc"
 ROS = VECTORS / "ros_acomms"

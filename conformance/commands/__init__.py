@@ -9,7 +9,8 @@ import importlib
 from ..suites import names as suite_names
 
 COMMANDS = {"run": "run", "list": "listing", "report": "report", "generate": "generate", "pcap": "pcap",
-            "watch": "watch"}  # command -> its module, in the order --help lists them
+            "watch": "watch", "fuzz": "fuzz", "mutants": "mutants",
+            "matrix": "matrix"}  # command -> its module, in the order --help lists them
 
 
 def suite_commands() -> dict[str, object]:

@@ -7,6 +7,7 @@ import importlib
 import importlib.util
 import inspect
 import shlex
+import sys
 from pathlib import Path
 
 from ..errors import UsageError
@@ -55,13 +56,18 @@ def adapter_choice(args, suite) -> tuple[str, list[str] | None]:
         return name, builtin.argv() if builtin is not None and builtin.argv is not None else None
     if args.adapter is not None:
         raise UsageError("give either --adapter or --adapter-cmd, not both")
+    return args.adapter_cmd, split_command(args.adapter_cmd)
+
+
+def split_command(cmd: str) -> list[str]:
+    """The argv of an --adapter-cmd (split like a shell would, never run by one); a usage error if there is none."""
     try:
-        argv = shlex.split(args.adapter_cmd)
+        argv = shlex.split(cmd)
     except ValueError as exc:
         raise UsageError(f"--adapter-cmd cannot be split: {exc}") from exc
     if not argv:
         raise UsageError("--adapter-cmd is empty (an unset variable?): give the adapter program to run")
-    return args.adapter_cmd, argv
+    return argv
 
 
 def adapter_arguments(args) -> dict[str, str]:
@@ -74,17 +80,25 @@ def adapter_arguments(args) -> dict[str, str]:
     return out
 
 
-def open_session(name: str, argv: list[str] | None, args, suite):
-    """The session for the chosen adapter: a subprocess when there is an argv, else a library adapter; either
-    also runs the scenarios of a handler it calls (sessions/calls.py)."""
+def worker_argv(name: str, suite, args) -> list[str]:
+    """The command line that runs a library adapter in a worker process of its own (sessions/worker.py)."""
+    return [sys.executable, "-m", "imc_conformance.sessions.worker", "--suite", suite.name, name, *args.adapter_arg]
+
+
+def open_session(name: str, argv: list[str] | None, args, suite, *, isolate: bool = False):
+    """The session for the chosen adapter: a subprocess when there is an argv, else a library adapter (in a worker
+    process if ``isolate``); either also runs the scenarios of a handler it calls (sessions/calls.py)."""
     from ..sessions.calls import CallTarget
     from ..sessions.library import LibrarySession
 
+    if argv is None and isolate:
+        load_library_adapter(name, suite, adapter_arguments(args))  # a one-line error now, not a dead worker later
+        argv = worker_argv(name, suite, args)
+    elif argv is not None and args.adapter_arg:
+        raise UsageError("--adapter-arg is for library adapters; a subprocess adapter takes its own arguments")
     if argv is not None:
         from ..sessions.subprocess import SubprocessSession
 
-        if args.adapter_arg:
-            raise UsageError("--adapter-arg is for library adapters; a subprocess adapter takes its own arguments")
         return CallTarget(SubprocessSession(argv, name=name, encoding_param=suite.encoding_param, timeout=args.timeout,
                                             hello_timeout=max(30.0, args.timeout),  # start-up (a JVM, class generation) takes longer
                                             memory_limit=args.memory_limit * 1024 * 1024))

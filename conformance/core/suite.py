@@ -98,12 +98,15 @@ class Suite(ABC):
 
     def implementation_errata(self, case_id: str, key: str | None, tags=()) -> list[str]:
         """Ids of the errata of implementation ``key`` that name the case: by a glob over case ids
-        (``cases``), or by tags the case has all of (``tags``)."""
+        (``cases``), by tags the case has all of (``tags``), or by one set of tags it has all of (``tag_sets``,
+        which is how generated cases are named)."""
         if key is None:
             return []
+        tags = set(tags)
         return [e["id"] for e in self.errata if e.get("implementation") == key and (
             any(fnmatch.fnmatchcase(case_id, g) for g in e.get("cases", ()))
-            or ("tags" in e and set(e["tags"]) <= set(tags)))]
+            or ("tags" in e and set(e["tags"]) <= tags)
+            or any(set(s) <= tags for s in e.get("tag_sets", ())))]
 
     @abstractmethod
     def generate(self, check: bool) -> int:
@@ -126,6 +129,16 @@ class Suite(ABC):
         """A session replaying a recorded run over ``link`` (sessions/replay.py); settings as the run had them:
         ``target``, ``src``, ``dst``, ``startup``, ``first_unique``."""
         raise ValueError(f"the suite {self.name!r} has no live targets to replay")
+
+    def fuzz_source(self, edition: str, cases=()):
+        """The suite's fuzz source (``fuzz.source.FuzzSource``) for ``edition``; ``cases``: the loaded corpus, whose
+        valid frames the fast mutation engine starts from. ValueError if the suite has none."""
+        raise ValueError(f"the suite {self.name!r} has no fuzz source")
+
+    def mutants(self, edition: str | None = None) -> list:
+        """The suite's seeded-bug implementations (``fuzz.mutation.Mutant``) for ``edition``, for ``imc-conformance
+        mutants``."""
+        return []
 
     def profile(self, name: str) -> dict:
         """The profile ``name`` of the suite's scenarios (``profiles/<name>.json``); ValueError if unknown."""

@@ -106,6 +106,10 @@ class VectorKind:
                 _canonical(message))
         return found
 
+    def forget(self, case: dict, edition: str) -> None:
+        """Drop what was compiled for ``case`` (a generated case judged once: the cache must not grow with them)."""
+        self._compiled.pop((id(case), edition), None)
+
     # ------------------------------------------------------------ planning
 
     def plan(self, case: dict, edition: str, emits: set[str], options: dict | None = None) -> list[Request]:

@@ -103,6 +103,7 @@ class Definitions:
     null_id: int
     header_defaults: dict
     raw: dict = field(repr=False, compare=False)
+    ids_elsewhere: frozenset[int] = frozenset()  # ids IMC.xml defines and these definitions do not
 
     @cached_property
     def by_id(self) -> dict[int, MessageDef]:
@@ -150,6 +151,7 @@ def parse_definitions(raw: dict) -> Definitions:
         messages=messages, editions=tuple(raw["editions"]), sync=frame["sync"]["value"],
         max_payload=frame["max_payload"]["value"], null_id=frame["null_message_id"]["value"],
         header_defaults={k: v for k, v in frame["header_defaults"].items() if k != "source"}, raw=raw,
+        ids_elsewhere=frozenset((frame.get("ids_elsewhere") or {}).get("values", ())),
     )
 
 

@@ -121,6 +121,19 @@ class ImcSuite(DataSuite):
         from .corpus.build import main
         return main(["--check"] if check else [])
 
+    def fuzz_source(self, edition: str, cases=()):
+        from ...fuzz.source import valid_frames
+        from .fuzzing import ImcFuzzSource
+
+        return ImcFuzzSource(self.defs, edition, {r["id"]: r["clause"] for r in self.rules}, valid_frames(cases))
+
+    def mutants(self, edition: str | None = None) -> list:
+        from ...fuzz.mutation import Mutant
+        from . import mutants
+
+        return [Mutant(m.name, m.__doc__, lambda m=m: m(self.defs), getattr(m, "equivalent", None), m in mutants.NEW)
+                for m in mutants.MUTANTS]
+
     def capture_rules(self):
         from .capture import ImcCaptureRules
         return ImcCaptureRules(self.defs, self.wire, self.rules, self.behaviour)

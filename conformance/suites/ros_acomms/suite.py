@@ -134,6 +134,21 @@ class RosSuite(DataSuite):
                     return ".message" + problem[0], f"{problem[1]} (edition {name})"
         return None
 
+    def fuzz_source(self, edition: str, cases=()):
+        from ...fuzz.source import valid_frames
+        from .fuzzing import RosFuzzSource
+
+        return RosFuzzSource(self.defs.edition(edition), {t.name: t.full for t in self.defs.suite_types},
+                             {r["id"]: r["clause"] for r in self.rules}, valid_frames(cases))
+
+    def mutants(self, edition: str | None = None) -> list:
+        from ...fuzz.mutation import Mutant
+        from . import mutants
+
+        edition = edition or self.editions[0]
+        return [Mutant(m.name, m.__doc__, lambda m=m: m(edition), getattr(m, "equivalent", None), m in mutants.NEW)
+                for m in mutants.MUTANTS]
+
     def generate(self, check: bool) -> int:
         from .corpus.build import main
         return main(["--check"] if check else [])

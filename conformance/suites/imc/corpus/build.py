@@ -12,7 +12,10 @@ import json
 import sys
 
 from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
+from ....fuzz import promote
+from ....fuzz.promote import promoted_cases
 from ..definitions import Definitions, lint_definitions, load_definitions
+from ..fuzzing import ImcFuzzSource
 from ... import load_suite
 from ...data_suite import write_generated
 from ..paths import imc_data
@@ -38,11 +41,14 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
     examples = load_examples()
     files: dict[str, str] = {}
     per_message = {}
+    promoted = promoted_cases(promote.load(imc_data(), "imc"), {
+        e: ImcFuzzSource(defs, e, {r["id"]: r["clause"] for r in load_suite("imc").rules}) for e in defs.editions})
     for mdef in defs.suite_messages:
         mc = MessageCases(defs, mdef)
         add_valid(mc, examples.get(mdef.abbrev, []))
         add_acceptable(mc)
         add_invalid(mc)
+        mc.extend(promoted.get(mdef.abbrev, []))
         doc = {
             "$schema": "../../schema/vectors.schema.json",
             "format": FORMAT_VERSION,

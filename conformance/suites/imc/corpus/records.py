@@ -48,6 +48,14 @@ class MessageCases:
         self.cases.append(record)
         return record
 
+    def extend(self, cases: list[dict]) -> None:
+        """Add cases built elsewhere (promoted fuzz findings), keeping ids unique."""
+        for case in cases:
+            if case["id"] in self._ids:
+                raise ValueError(f"duplicate case id {case['id']}")
+            self._ids.add(case["id"])
+            self.cases.append(case)
+
     def both_orders(self, message: dict) -> tuple[dict, dict[str, bytes]]:
         """The canonical (decoded) form of ``message`` and its frames in both byte orders."""
         frames = {order: codec.encode(self.defs, message, order) for order in ("le", "be")}

@@ -16,9 +16,12 @@ import struct
 import sys
 from collections import Counter, defaultdict
 
+from ....fuzz import promote
+from ....fuzz.promote import promoted_cases
 from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
 from .. import codec
 from ..definitions import Edition, FieldType, Message, RosDefinitions, TypeDef, load_definitions
+from ..fuzzing import RosFuzzSource
 from ..msgtext import full_text, md5, service_md5
 from ... import load_suite
 from ...data_suite import write_generated
@@ -258,8 +261,11 @@ def build_corpus(defs: RosDefinitions) -> dict[str, str]:
     examples, rules = load_examples(), load_rules()
     clauses = {r["id"]: r["clause"] for r in rules}
     files, per_type = {}, {}
+    groups = {t.name: t.full for t in defs.suite_types}
+    promoted = promoted_cases(promote.load(ros_data(), "ros_acomms"), {
+        e: RosFuzzSource(defs.edition(e), groups, clauses) for e in defs.editions})
     for t in defs.suite_types:
-        cases = build_type(defs, t, examples.get(t.full, []), clauses)
+        cases = build_type(defs, t, examples.get(t.full, []), clauses) + promoted.get(t.name, [])
         per_type[t] = cases
         doc = {"$schema": "../../schema/ros_acomms-vectors.schema.json", "format": FORMAT_VERSION, "suite": "ros_acomms",
                "message": {"name": t.name, "type": t.full, "kind": t.kind, "clause": t.clause},

@@ -1,0 +1,154 @@
+"""``imc-conformance fuzz``: generated messages and mutated frames from the definitions, judged against one or more
+implementations beside the reference codec; findings shrunk, classified, reported as ``run`` reports, and promoted
+into the corpus on request."""
+
+from __future__ import annotations
+
+import datetime as dt
+import time
+from pathlib import Path
+
+from ..errors import UsageError
+from .options import add_reports, add_suite, count, megabytes, positive_seconds, DEFAULT_MEMORY_MB
+
+DEFAULT_BUDGET = 100
+
+
+def add(sub) -> None:
+    fuzz = sub.add_parser("fuzz", help="hunt for deviations beyond the corpus with generated and mutated inputs")
+    add_suite(fuzz)
+    fuzz.add_argument("--edition", help="the edition to generate in (default: the suite's first)")
+    fuzz.add_argument("--message", action="append", default=[], metavar="NAME",
+                      help="only this message or type (repeatable; default: every one)")
+    fuzz.add_argument("--adapter", action="append", default=[], metavar="NAME",
+                      help="an implementation, as run --adapter takes it (repeatable: with several, each deviation is "
+                           "classified by which implementations agree with the reference)")
+    fuzz.add_argument("--adapter-cmd", action="append", default=[], metavar="CMD",
+                      help="a subprocess adapter (repeatable), as run --adapter-cmd takes it")
+    fuzz.add_argument("--adapter-arg", action="append", default=[], metavar="NAME=VALUE",
+                      help="an argument for the library adapters' class or factory (repeatable)")
+    fuzz.add_argument("--in-process", action="store_true",
+                      help="run library adapters in this process (faster; by default each runs in a worker process, "
+                           "so that its crash or hang is a finding with the input that caused it)")
+    fuzz.add_argument("--timeout", type=positive_seconds, default=5.0, help="seconds per request (default 5)")
+    fuzz.add_argument("--memory-limit", type=megabytes, default=DEFAULT_MEMORY_MB, metavar="MB",
+                      help=f"data memory of each adapter process (default {DEFAULT_MEMORY_MB}; 0: no limit)")
+    fuzz.add_argument("--seed", type=count, default=0, metavar="N", help="the run's seed (default 0): the same seed "
+                                                                         "and budget give the same findings")
+    fuzz.add_argument("--budget", type=count, default=DEFAULT_BUDGET, metavar="N",
+                      help=f"examples generated per message and property (default {DEFAULT_BUDGET}); shrinking a "
+                           "finding judges more")
+    fuzz.add_argument("--duration", type=positive_seconds, metavar="S",
+                      help="stop after S seconds, whatever is left of the budget (the run is then not reproducible)")
+    fuzz.add_argument("--property", action="append", default=[], choices=("message", "frame"),
+                      help="message: generated messages, encoded and decoded both ways; frame: mutated frames "
+                           "(default: both)")
+    fuzz.add_argument("--sweep", type=count, default=0, metavar="N",
+                      help="first, N mutations of each message's corpus frames drawn without hypothesis (the fast "
+                           "engine: judged in one batch, findings shrunk to the shortest frame)")
+    fuzz.add_argument("--database", type=Path, metavar="DIR",
+                      help="keep hypothesis's example database here (default: none, so runs are reproducible)")
+    fuzz.add_argument("--promote", type=Path, metavar="FILE",
+                      help="add the unexplained findings to this promoted-findings file (vectors/<suite>/promoted.json "
+                           "in a checkout); imc-conformance generate makes them vectors")
+    add_reports(fuzz)
+    fuzz.set_defaults(func=command)
+
+
+def command(args) -> int:
+    from .. import __version__
+    from ..core.cases import select_cases
+    from ..core.runner import run_cases
+    from ..core.session import AdapterStartError
+    from ..files import open_corpus
+    from ..fuzz import promote
+    from ..fuzz.engine import Search
+    from ..fuzz.report import fuzz_result, review, unexplained
+    from ..render.terminal import print_result
+    from ..core.hello import check_hello
+    from .adapters import adapter_arguments, open_session, split_command
+    from .options import chosen_edition
+    from .output import report_targets, terminal, write_reports
+
+    targets = report_targets(args)
+    if args.budget == 0:
+        raise UsageError("--budget 0 judges nothing: give a positive number of examples")
+    adapter_arguments(args)
+    suite, everything = open_corpus(args.suite, None, frozenset(args.message) or None)
+    edition = chosen_edition(suite, args.edition)
+    unknown = set(args.message) - {g.name for g in suite.groups}
+    if unknown:
+        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    try:
+        source = suite.fuzz_source(edition, everything)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    groups = [g for g in source.groups if not args.message or g in args.message]
+    chosen = [(name, suite.adapters[name].argv() if name in suite.adapters and suite.adapters[name].argv else None)
+              for name in args.adapter] + [(cmd, split_command(cmd)) for cmd in args.adapter_cmd]
+    if not chosen:
+        chosen = [(next(iter(suite.adapters)), None)]
+    names = [name for name, _ in chosen]
+    if len(set(names)) != len(names):
+        raise UsageError("an implementation is named twice")
+    sessions = {}
+    try:
+        for name, argv in chosen:
+            try:
+                sessions[name] = open_session(name, argv, args, suite, isolate=not args.in_process)
+            except ValueError as exc:
+                raise UsageError(str(exc)) from exc
+        implementations = [check_hello(s.hello(), suite.name, suite.encoding_param + "s", suite.encodings)["implementation"]
+                           for s in sessions.values()]
+        started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+        began = time.monotonic()
+        notes = [f"seed {args.seed}, budget {args.budget} examples per {suite.group_label} and property, edition "
+                 f"{edition}; rerun with the same seed and budget for the same findings"]
+        if len(sessions) > 1:
+            corpus = select_cases([c for c in everything if c.kind == "vector"], edition, groups)
+            flagged = review({name: run_cases(s, suite, corpus, edition=edition, adapter=name)
+                              for name, s in sessions.items()})
+            notes.append(f"corpus review: {len(flagged)} of {len(corpus)} vectors fail in every implementation with no "
+                         f"erratum to explain it{': ' + ', '.join(flagged[:20]) if flagged else ''}"
+                         f"{' ...' if len(flagged) > 20 else ''}")
+        until = began + args.duration if args.duration else None
+        database = None
+        if args.database is not None:
+            from hypothesis.database import DirectoryBasedExampleDatabase
+
+            database = DirectoryBasedExampleDatabase(str(args.database))
+        search = Search(suite, source, sessions, edition, seed=args.seed, budget=args.budget, database=database,
+                        until=until)
+        try:
+            if args.sweep:
+                search.sweep(groups, args.sweep)
+            tally = search.run(groups, tuple(args.property) or ("message", "frame"))
+        except KeyboardInterrupt:
+            tally = search.tally
+            tally.stopped = "interrupted"
+    except AdapterStartError as exc:
+        raise UsageError(str(exc)) from exc
+    finally:
+        for session in sessions.values():
+            session.close()
+    judged = sum(tally.judged.values())
+    notes.append(f"{judged} examples judged, {len(tally.findings)} findings ({unexplained(tally)} unexplained)"
+                 + (f"; stopped early: {tally.stopped}" if tally.stopped else ""))
+    result = fuzz_result(suite, source, tally, names, implementations, edition, started=started,
+                         duration=time.monotonic() - began, notes=notes)
+    console = terminal()
+    print_result(result, console)
+    problems = write_reports(result, targets, console)
+    if args.promote is not None:
+        records = [promote.entry(f, args.seed, names, edition, __version__, dt.date.today())
+                   for f in tally.findings if f.unexplained]
+        try:
+            added = promote.merge(args.promote, suite.name, records)
+        except (OSError, ValueError) as exc:
+            raise UsageError(f"cannot promote into {args.promote}: {exc}") from exc
+        console.print(f"promoted {added} new findings into {args.promote} ({len(records) - added} were there already); "
+                      "imc-conformance generate makes them vectors", highlight=False, markup=False)
+    if tally.stopped == "interrupted":
+        return 130
+    return 2 if problems else (1 if unexplained(tally) else 0)
+

@@ -1,0 +1,231 @@
+"""The search: hypothesis draws inputs from a suite's source, each becomes a vector case whose expectation is the
+reference's, and the one runner judges it through every session. A failing verdict whose signature (which
+implementations fail which check, how, and with which errata) has not been seen is a finding; hypothesis then
+shrinks it to its smallest input, and the search goes on for other signatures until the budget is spent.
+
+Reproducible: hypothesis runs with a ``random.Random`` seeded from ``(seed, suite, group, property, round)``, no
+deadline and no example database unless one is given, so the same seed and budget give the same findings.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+from ..core.cases import Case, expectation
+from ..core.results import CaseResult
+from ..core.runner import run_cases
+from ..core.verdicts import failing
+from .source import PROPERTIES
+
+MAX_FINDINGS = 4  # distinct findings per group and property
+
+
+@contextmanager
+def reproducible():
+    """Hypothesis also draws constants it finds in the modules loaded from outside site-packages ("local constants"):
+    which modules a process has loaded (an editable install, a test suite) would then change the findings of a seed.
+    Switched off while a search runs. This reaches into hypothesis's internals, which is why pyproject.toml pins
+    hypothesis exactly and tests/test_fuzz.py checks the result across processes."""
+    from hypothesis.internal.conjecture import providers
+
+    saved = providers._get_local_constants
+    empty = providers.Constants(integers=providers.SortedSet(), floats=providers.SortedSet(key=providers.float_to_int),
+                                bytes=providers.SortedSet(), strings=providers.SortedSet())
+    providers.CONSTANTS_CACHE.cache.clear()
+    providers._get_local_constants = lambda: empty
+    try:
+        yield
+    finally:
+        providers._get_local_constants = saved
+        providers.CONSTANTS_CACHE.cache.clear()
+
+
+class OutOfTime(Exception):
+    """The search's duration is spent (``--duration``)."""
+
+
+@dataclass
+class Finding:
+    """A shrunk input on which some implementation deviates from the reference: its case, each implementation's
+    result on it, and how the deviation splits the implementations."""
+
+    group: str
+    prop: str
+    case: dict
+    results: dict[str, CaseResult]
+    classification: str
+
+    @property
+    def deviating(self) -> list[str]:
+        return [name for name, r in self.results.items() if failing(r.verdict, strict=False)]
+
+    @property
+    def unexplained(self) -> list[str]:
+        """The implementations whose failure no documented erratum explains."""
+        return [name for name in self.deviating if not self.results[name].errata]
+
+
+@dataclass
+class Tally:
+    """Examples judged per (group, property), and the findings."""
+
+    judged: dict[tuple[str, str], int] = field(default_factory=dict)
+    findings: list[Finding] = field(default_factory=list)
+    stopped: str | None = None  # why the search ended early, if it did
+
+
+def _size(case: dict) -> int:
+    return min(len(h) for h in case["frames"].values())
+
+
+def classify(names: list[str], deviating: list[str]) -> str:
+    if len(names) == 1:
+        return f"{names[0]} deviates from the reference"
+    if set(deviating) == set(names):
+        return "every implementation deviates from the reference: review the reference and the definitions"
+    agree = [n for n in names if n not in deviating]
+    return f"{', '.join(deviating)} {'deviates' if len(deviating) == 1 else 'deviate'}; {', '.join(agree)} " \
+           f"{'matches' if len(agree) == 1 else 'match'} the reference"
+
+
+class Search:
+    """One fuzzing run of a suite's source against named sessions."""
+
+    def __init__(self, suite, source, sessions: dict, edition: str, *, seed: int, budget: int,
+                 database=None, until: float | None = None, max_findings: int = MAX_FINDINGS, first_only: bool = False):
+        self.suite, self.source, self.sessions, self.edition = suite, source, sessions, edition
+        self.seed, self.budget, self.database, self.until = seed, budget, database, until
+        self.max_findings, self.first_only = max_findings, first_only
+        self.tally = Tally()
+        self.groups = {g.name for g in suite.groups}
+
+    def judge(self, case: dict) -> dict[str, CaseResult]:
+        """Every session's result on one case, through the runner (the corpus's own verdict policy and errata)."""
+        group = case["id"].split("/")[1]
+        out = {}
+        for name, session in self.sessions.items():
+            result = run_cases(session, self.suite, [Case(case["id"], group, "vector", case)], edition=self.edition,
+                               adapter=name)
+            out[name] = result.cases[0]
+        self.suite.kinds["vector"].forget(case, self.edition)
+        return out
+
+    def signature(self, case: dict, results: dict[str, CaseResult]):
+        deviating = [(name, r.verdict.value, next((c.check.split("-")[0] for c in r.checks
+                                                    if failing(c.verdict, strict=False)), ""),
+                      tuple(r.errata)) for name, r in results.items() if failing(r.verdict, strict=False)]
+        if not deviating:
+            return None
+        return expectation(case, self.edition), case.get("rule"), tuple(deviating)
+
+    def run(self, groups, props=PROPERTIES) -> Tally:
+        for group in groups:
+            for prop in props:
+                try:
+                    self.search(group, prop)
+                except OutOfTime:
+                    self.tally.stopped = "the duration was spent"
+                    return self.tally
+                if self.first_only and self.tally.findings:
+                    return self.tally
+        return self.tally
+
+    def sweep(self, groups, per_group: int) -> None:
+        """The fast engine: ``per_group`` mutations of the group's corpus frames drawn with a seeded ``random.Random``
+        (no hypothesis), judged in one batch per group. Each new deviation is shrunk by hand: the same mutation is
+        tried on the group's shorter corpus frames, shortest first, and with smaller choices, and the first that
+        still deviates the same way is the finding."""
+        from ..core.runner import run_cases
+
+        rng = random.Random(f"{self.seed}/{self.suite.name}/sweep")
+        for group in groups:
+            seeds = sorted(self.source.seed_frames(group), key=lambda ef: (len(ef[1]), ef))
+            if not seeds:
+                continue
+            key = (group, "sweep")
+            drawn = [(*rng.choice(seeds), rng.choice(self.source.mutations), rng.randrange(1 << 16),
+                      rng.randrange(1 << 16)) for _ in range(per_group)]
+            cases = {}
+            for encoding, frame, mutation, a, b in drawn:
+                case = self.source.frame_case(group, encoding, self.source.mutate(group, frame, encoding, mutation, a, b),
+                                              mutation)
+                if case is not None:
+                    cases.setdefault(case["id"], (case, (mutation, a, b)))
+            self.tally.judged[key] = len(cases)
+            batch = [Case(i, i.split("/")[1], "vector", c) for i, (c, _) in cases.items()]
+            results: dict[str, dict] = {}
+            for name, session in self.sessions.items():
+                for r in run_cases(session, self.suite, batch, edition=self.edition, adapter=name).cases:
+                    results.setdefault(r.id, {})[name] = r
+            seen: set = set()
+            for case_id, (case, how) in cases.items():
+                sig = self.signature(case, results[case_id])
+                if sig is None or sig in seen:
+                    continue
+                seen.add(sig)
+                case, found = self.smallest(group, seeds, how, sig, case, results[case_id])
+                deviating = [n for n, r in found.items() if failing(r.verdict, strict=False)]
+                self.tally.findings.append(Finding(case["id"].split("/")[1], "frame", case, found,
+                                                   classify(list(self.sessions), deviating)))
+            for case, _ in cases.values():
+                self.suite.kinds["vector"].forget(case, self.edition)
+
+    def smallest(self, group, seeds, how, sig, case, results):
+        """The shortest input deviating as ``sig`` does: the same mutation on shorter frames, then smaller choices."""
+        mutation, a, b = how
+        for encoding, frame in seeds:
+            for a_, b_ in ((0, 0), (a % 64, b % 64), (a, b)):
+                candidate = self.source.frame_case(group, encoding, self.source.mutate(group, frame, encoding, mutation,
+                                                                                        a_, b_), mutation)
+                if candidate is None or _size(candidate) > _size(case):
+                    continue
+                found = self.judge(candidate)
+                if self.signature(candidate, found) == sig:
+                    return candidate, found
+        return case, results
+
+    def search(self, group: str, prop: str) -> None:
+        from hypothesis import HealthCheck, Phase, Verbosity, find, settings
+        from hypothesis.errors import NoSuchExample, Unsatisfiable
+
+        key = (group, prop)
+        self.tally.judged[key] = 0
+        seen: set = set()
+        strategy = self.source.inputs(group, prop).map(lambda drawn: self.source.case(group, prop, drawn))
+
+        def condition(case) -> bool:
+            if self.until is not None and time.monotonic() > self.until:
+                raise OutOfTime
+            if case is None:
+                return False
+            self.tally.judged[key] += 1
+            sig = self.signature(case, self.judge(case))
+            return sig is not None and sig not in seen
+
+        for round_ in range(self.max_findings):
+            left = self.budget - self.tally.judged[key]
+            if left <= 0:
+                return
+            phases = [Phase.generate, Phase.shrink] + ([Phase.reuse] if self.database is not None else [])
+            config = settings(max_examples=left, deadline=None, database=self.database, phases=phases,
+                              suppress_health_check=list(HealthCheck), verbosity=Verbosity.quiet,
+                              report_multiple_bugs=False)
+            rng = random.Random(f"{self.seed}/{self.suite.name}/{group}/{prop}/{round_}")
+            try:
+                with reproducible():
+                    case = find(strategy, condition, settings=config, random=rng,
+                                database_key=f"{self.suite.name}/{group}/{prop}/{round_}".encode())
+            except (NoSuchExample, Unsatisfiable):
+                return
+            results = self.judge(case)
+            sig = self.signature(case, results)
+            if sig is None or sig in seen:  # cannot happen for a deterministic implementation; never loop on it
+                return
+            seen.add(sig)
+            filed = case["id"].split("/")[1]
+            names = list(self.sessions)
+            deviating = [n for n, r in results.items() if failing(r.verdict, strict=False)]
+            self.tally.findings.append(Finding(filed, prop, case, results, classify(names, deviating)))

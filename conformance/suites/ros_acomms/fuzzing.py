@@ -1,0 +1,225 @@
+"""The ros_acomms fuzz source: hypothesis strategies of every type of an edition from the definitions, and mutations
+of ROS 1 bytes. No per-type code: strategies follow each field's builtin, array kind and nested type.
+
+Generated messages are valid (UTF-8 strings, ``time`` nsecs below a second, ``duration`` nsecs within ±1 s), each a
+``valid`` case. A mutated frame is judged by the reference: refused (``invalid``, with its rule; ``final-blob`` when
+the defect lies in a string or ``uint8[]`` that ends the message), decoded to a valid message, or decoded to what the
+corpus files as implementation-defined (bytes after the message, a bool byte other than 0 and 1, string bytes that
+are not UTF-8): ``acceptable``. A frame whose ``time`` or ``duration`` then carries a second or more in nsecs is not
+judged (the corpus's normalising outcome is defined for its own cases only).
+"""
+
+from __future__ import annotations
+
+import struct
+
+import orjson
+from hypothesis import strategies as st
+
+from ...fuzz.source import case_id, sized_lists
+from ...kinds.vector.errors import EncodeError, FrameError
+from ...kinds.vector.floats import FLOAT_CLASSES
+from . import codec
+from .codec import int_bounds, int_form
+from .definitions import PRIMITIVES, Edition, FieldType
+
+ENC = "ros1"
+MAX_TEXT = 200
+MAX_ARRAY = 6
+ACCEPT_OR_REJECT = [{"outcome": "accept"}, {"outcome": "reject"}]
+MUTATIONS = ("bit-flip", "truncate", "extend", "length-past-data", "byte-set")
+SECOND = 1_000_000_000
+
+
+class RosFuzzSource:
+    """Strategies and mutations for every type of one edition."""
+
+    suite = "ros_acomms"
+    mutations = MUTATIONS
+
+    def __init__(self, view: Edition, groups: dict[str, str], clauses: dict[str, str],
+                 corpus_frames: dict[str, list[tuple[str, bytes]]] | None = None):
+        self.view, self.clauses = view, clauses
+        self.types = {g: full for g, full in groups.items() if full in view}  # group name -> full type name
+        self.groups = tuple(self.types)
+        self._seed_frames = corpus_frames or {}
+        self._strategies: dict[str, object] = {}
+
+    # ------------------------------------------------------------ strategies
+
+    def fields(self, full: str):
+        if full not in self._strategies:
+            self._strategies[full] = st.fixed_dictionaries({f.name: self.value(f.type) for f in self.view[full].fields})
+        return self._strategies[full]
+
+    def value(self, t: FieldType):
+        if t.array is not None:
+            if t.base == "uint8":
+                sized = st.binary(min_size=t.array, max_size=t.array) if t.array >= 0 else st.binary(max_size=MAX_TEXT)
+                return sized.map(bytes.hex)
+            element = self.value(t.element)
+            return (st.lists(element, min_size=t.array, max_size=t.array) if t.array >= 0
+                    else sized_lists(element, MAX_ARRAY))
+        base = t.base
+        if base == "bool":
+            return st.booleans()
+        if base in ("float32", "float64"):
+            width = PRIMITIVES[base][1]
+            specials = [v[0 if width == 4 else 1] for v in FLOAT_CLASSES.values()]
+            return st.one_of(st.floats(width=width * 8, allow_nan=False), st.floats(-1e6, 1e6, width=width * 8),
+                             st.sampled_from(specials))
+        if base in PRIMITIVES:
+            lo, hi = int_bounds(base)
+            return st.one_of(st.integers(lo, hi), st.sampled_from(sorted({lo, hi, 0, 1}))).map(int_form)
+        if base == "string":
+            return st.text(max_size=MAX_TEXT)
+        if base == "time":
+            return st.fixed_dictionaries({"secs": st.integers(0, 0xFFFFFFFF), "nsecs": st.integers(0, SECOND - 1)})
+        if base == "duration":
+            return st.fixed_dictionaries({"secs": st.integers(-(1 << 31), (1 << 31) - 1),
+                                          "nsecs": st.integers(-(SECOND - 1), SECOND - 1)})
+        return st.deferred(lambda: self.fields(base))
+
+    def message(self, group: str):
+        full = self.types[group]
+        return st.fixed_dictionaries({"type": st.just(full), "fields": self.fields(full)})
+
+    def inputs(self, group: str, prop: str):
+        if prop == "message":
+            return self.message(group)
+        return st.fixed_dictionaries({"message": self.message(group), "encoding": st.just(ENC),
+                                      "mutation": st.sampled_from(MUTATIONS),
+                                      "a": st.integers(0, 1 << 16), "b": st.integers(0, 1 << 16)})
+
+    # ------------------------------------------------------------ cases
+
+    def case(self, group: str, prop: str, drawn) -> dict | None:
+        if prop == "message":
+            try:
+                frame = codec.encode(self.view, drawn)
+            except EncodeError:
+                return None
+            canonical = codec.decode(self.view, drawn["type"], frame)
+            return self.record(group, "valid", self.view[drawn["type"]].definition.clause,
+                               [f"encode-{ENC}", f"decode-{ENC}", "roundtrip"], ["valid", "fuzz", *self.tags(canonical)],
+                               frame, canonical)
+        try:
+            frame = codec.encode(self.view, drawn["message"])
+        except EncodeError:
+            return None
+        mutated = self.mutate(group, frame, ENC, drawn["mutation"], drawn["a"], drawn["b"])
+        return self.frame_case(group, ENC, mutated, drawn["mutation"])
+
+    def frame_case(self, group: str, encoding: str, frame: bytes, mutation: str) -> dict | None:
+        full = self.types[group]
+        tags = ["fuzz", f"mutation:{mutation}"]
+        try:
+            spans = codec.layout(self.view, full, frame)
+            decoded = codec.decode(self.view, full, frame)
+        except FrameError as exc:
+            return self.record(group, "invalid", self.clauses[exc.rule], [f"decode-{ENC}"],
+                               ["invalid", f"rule:{exc.rule}", *tags, *self.final_blob(group, frame)],
+                               frame, rule=exc.rule)
+        if _nsecs_over(decoded):
+            return None
+        used = max((s.end for s in spans), default=0)
+        reasons = (["trailing-bytes"] if used < len(frame) else []) + [
+            "bool-byte" for s in spans if s.type == "bool" and frame[s.start] > 1][:1]
+        if b'{"hex":' in orjson.dumps(decoded):
+            reasons.append("non-utf8")
+        if reasons:
+            return self.record(group, "acceptable", "ros-acomms#ros-1-serialization", [f"decode-{ENC}"],
+                               ["acceptable", *reasons, *tags, *self.tags(decoded)], frame, decoded,
+                               outcomes=ACCEPT_OR_REJECT, reference="accept")
+        return self.record(group, "valid", self.view[full].definition.clause, [f"decode-{ENC}", "roundtrip"],
+                           ["valid", *tags, *self.tags(decoded)], frame, decoded)
+
+    def final_blob(self, group: str, frame: bytes) -> list[str]:
+        """``final-blob`` when the refused defect lies in a string or ``uint8[]`` that ends the type: the reference
+        had read that field's length prefix when it refused."""
+        m = self.view[self.types[group]]
+        last = m.fields[-1] if m.fields else None
+        if last is None or not (last.type.base == "string" and last.type.array is None
+                                or last.type.base == "uint8" and last.type.array is not None and last.type.array < 0):
+            return []
+        spans: list = []
+        try:
+            codec.decode(self.view, m.full, frame, spans)
+        except FrameError:
+            pass
+        return ["final-blob"] if any(s.path == f"{m.name}.{last.name}.length" for s in spans) else []
+
+    def record(self, group: str, expect: str, clause: str, checks: list[str], tags: list[str], frame: bytes,
+               message: dict | None = None, **extra) -> dict:
+        from .msgtext import md5
+
+        full = self.types[group]
+        case = {"id": "", "expect": {self.view.name: expect}, "clause": clause, "type": full, "md5": md5(self.view, self.view[full]),
+                "checks": checks, "frames": {ENC: frame.hex()}}
+        if message is not None:
+            case["message"] = message
+            if b'"nan:' in orjson.dumps(message):
+                case["compare"] = {"nan_payload": True}
+        case.update(extra)
+        case["tags"] = sorted(set(tags))
+        case["id"] = case_id(self.suite, group, case)
+        return case
+
+    def tags(self, message: dict) -> list[str]:
+        """What a decoded message holds that errata are filed by: ``time-secs-from-2^31`` (a ``time`` whose secs do
+        not fit a signed 32-bit integer)."""
+        out = set()
+        stack = [message["fields"]]
+        while stack:
+            value = stack.pop()
+            if isinstance(value, dict):
+                if set(value) == {"secs", "nsecs"} and isinstance(value["secs"], int) and value["secs"] >= 1 << 31:
+                    out.add("time-secs-from-2^31")
+                stack += list(value.values())
+            elif isinstance(value, list):
+                stack += value
+        return sorted(out)
+
+    # ------------------------------------------------------------ mutations
+
+    def seed_frames(self, group: str) -> list[tuple[str, bytes]]:
+        return self._seed_frames.get(group, [])
+
+    def clause(self, group: str) -> str:
+        return self.view[self.types[group]].definition.clause
+
+    def mutate(self, group: str, frame: bytes, encoding: str, mutation: str, a: int, b: int) -> bytes:
+        n = len(frame)
+        if mutation == "truncate":
+            return frame[:a % n] if n else frame
+        if mutation == "extend":
+            return frame + bytes([a & 0xFF]) * (1 + b % 8)
+        if not n:
+            return frame
+        out = bytearray(frame)
+        if mutation == "bit-flip":
+            out[a % n] ^= 1 << (b % 8)
+        elif mutation == "byte-set":
+            out[a % n] = b & 0xFF
+        else:  # length-past-data: a length or count prefix grown past the bytes that follow
+            prefixes = [s for s in codec.layout(self.view, self.types[group], frame) if s.role == "length"]
+            if not prefixes:
+                return frame
+            s = prefixes[a % len(prefixes)]
+            (value,) = struct.unpack_from("<I", out, s.start)
+            struct.pack_into("<I", out, s.start, (value + 1 + b % 8) & 0xFFFFFFFF)
+        return bytes(out)
+
+
+def _nsecs_over(message: dict) -> bool:
+    """Whether a decoded message holds a ``time`` or ``duration`` with a second or more in nsecs."""
+    stack = [message["fields"]]
+    while stack:
+        value = stack.pop()
+        if isinstance(value, dict):
+            if set(value) == {"secs", "nsecs"} and isinstance(value["nsecs"], int) and abs(value["nsecs"]) >= SECOND:
+                return True
+            stack += list(value.values())
+        elif isinstance(value, list):
+            stack += value
+    return False
