@@ -57,8 +57,8 @@ def test_the_implementation_agrees_with_every_vector_but_its_documented_errata(n
 def test_every_erratum_of_the_implementation_is_still_observed(name):
     seen = collections.Counter(e for edition in EDITIONS for cid in failing(run(name, edition))
                                for e in SUITE.implementation_errata(cid, name, BY_ID[cid]["tags"]))
-    documented = {e["id"] for e in SUITE.errata if e.get("implementation") == name}
-    assert documented and set(seen) == documented, seen
+    documented = {e["id"] for e in SUITE.errata if e.get("implementation") == name and ("cases" in e or "tags" in e)}
+    assert documented and set(seen) == documented, seen  # errata naming only generated cases: tests/test_fuzz.py
 
 
 def test_every_valid_frame_is_what_both_implementations_serialize_and_describe():

@@ -81,10 +81,14 @@ def _size(case: dict) -> int:
     return min(len(h) for h in case["frames"].values())
 
 
-def classify(names: list[str], deviating: list[str]) -> str:
+def classify(names: list[str], results: dict) -> str:
+    """How a deviation splits the implementations (``results``: each one's CaseResult)."""
+    deviating = [n for n in names if failing(results[n].verdict, strict=False)]
     if len(names) == 1:
         return f"{names[0]} deviates from the reference"
     if set(deviating) == set(names):
+        if all(results[n].errata for n in names):
+            return "every implementation deviates from the reference, each as a documented erratum says"
         return "every implementation deviates from the reference: review the reference and the definitions"
     agree = [n for n in names if n not in deviating]
     return f"{', '.join(deviating)} {'deviates' if len(deviating) == 1 else 'deviate'}; {', '.join(agree)} " \
@@ -167,9 +171,8 @@ class Search:
                     continue
                 seen.add(sig)
                 case, found = self.smallest(group, seeds, how, sig, case, results[case_id])
-                deviating = [n for n, r in found.items() if failing(r.verdict, strict=False)]
                 self.tally.findings.append(Finding(case["id"].split("/")[1], "frame", case, found,
-                                                   classify(list(self.sessions), deviating)))
+                                                   classify(list(self.sessions), found)))
             for case, _ in cases.values():
                 self.suite.kinds["vector"].forget(case, self.edition)
 
@@ -225,7 +228,5 @@ class Search:
             if sig is None or sig in seen:  # cannot happen for a deterministic implementation; never loop on it
                 return
             seen.add(sig)
-            filed = case["id"].split("/")[1]
-            names = list(self.sessions)
-            deviating = [n for n, r in results.items() if failing(r.verdict, strict=False)]
-            self.tally.findings.append(Finding(filed, prop, case, results, classify(names, deviating)))
+            self.tally.findings.append(Finding(case["id"].split("/")[1], prop, case, results,
+                                               classify(list(self.sessions), results)))

@@ -58,15 +58,12 @@ def case_id(suite: str, group: str, case: dict) -> str:
     return f"{suite}/{group}/fuzz/{hashlib.sha256(key).hexdigest()[:12]}"
 
 
-def valid_frames(cases) -> dict[str, list[tuple[str, bytes]]]:
-    """(encoding, frame) of the valid vector cases of each group of a loaded corpus."""
+def valid_frames(cases, edition: str) -> dict[str, list[tuple[str, bytes]]]:
+    """(encoding, frame) of the vector cases of each group of a loaded corpus that are valid in ``edition``."""
+    from ..core.cases import expectation
+
     out: dict[str, list[tuple[str, bytes]]] = {}
     for c in cases:
-        if c.kind == "vector" and "valid" in _expectations(c.data) and "frames" in c.data:
+        if c.kind == "vector" and "frames" in c.data and expectation(c.data, edition) == "valid":
             out.setdefault(c.group, []).extend((e, bytes.fromhex(h)) for e, h in c.data["frames"].items())
     return out
-
-
-def _expectations(case: dict) -> set:
-    expect = case.get("expect")
-    return {expect} if isinstance(expect, str) else set(expect.values())

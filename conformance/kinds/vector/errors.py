@@ -11,6 +11,7 @@ class FrameError(ValueError):
     def __init__(self, rule: str, offset: int, detail: str):
         super().__init__(f"{rule} at byte {offset}: {detail}")
         self.rule, self.offset, self.detail = rule, offset, detail
+        self.role: str | None = None  # the part being read when the bytes ran out (a length, count or id), if known
 
 
 class NotJudged(ValueError):

@@ -171,7 +171,11 @@ class _Reader:
             self.spans.append(Span(start, self.pos, path, type_, role))
 
     def _u16(self, rule: str, what: str, path: str, role: str) -> int:
-        start = self._take(2, rule, what)
+        try:
+            start = self._take(2, rule, what)
+        except FrameError as exc:
+            exc.role = role  # what was being read: a length, a count, an inline id
+            raise
         self._mark(start, path, "uint16_t", role)
         return struct.unpack_from(self.e + "H", self.frame, start)[0]
 

@@ -167,8 +167,9 @@ class ImcFuzzSource:
         except FrameError as exc:
             if self.known_elsewhere(frame, exc):
                 return None
+            read = [f"overrun:{exc.role}"] if exc.role else []  # errata I1/I2 are about reading ids and counts
             return self.record(group, "invalid", self.clauses[exc.rule], [f"decode-{encoding}"],
-                               ["invalid", f"rule:{exc.rule}", *tags], frames={encoding: frame}, rule=exc.rule)
+                               ["invalid", f"rule:{exc.rule}", *read, *tags], frames={encoding: frame}, rule=exc.rule)
         reasons = self.acceptable_reasons(decoded) + framing_reasons(frame, spans)
         if decoded["abbrev"] != group and decoded["abbrev"] in self.groups:  # a mutated id made it another message
             group = decoded["abbrev"]

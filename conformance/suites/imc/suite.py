@@ -125,7 +125,7 @@ class ImcSuite(DataSuite):
         from ...fuzz.source import valid_frames
         from .fuzzing import ImcFuzzSource
 
-        return ImcFuzzSource(self.defs, edition, {r["id"]: r["clause"] for r in self.rules}, valid_frames(cases))
+        return ImcFuzzSource(self.defs, edition, {r["id"]: r["clause"] for r in self.rules}, valid_frames(cases, edition))
 
     def mutants(self, edition: str | None = None) -> list:
         from ...fuzz.mutation import Mutant

@@ -118,7 +118,7 @@ class RosFuzzSource:
             decoded = codec.decode(self.view, full, frame)
         except FrameError as exc:
             return self.record(group, "invalid", self.clauses[exc.rule], [f"decode-{ENC}"],
-                               ["invalid", f"rule:{exc.rule}", *tags, *self.final_blob(group, frame)],
+                               ["invalid", f"rule:{exc.rule}", *tags, *self.final_blob(group, frame, exc)],
                                frame, rule=exc.rule)
         if _nsecs_over(decoded):
             return None
@@ -134,20 +134,22 @@ class RosFuzzSource:
         return self.record(group, "valid", self.view[full].definition.clause, [f"decode-{ENC}", "roundtrip"],
                            ["valid", *tags, *self.tags(decoded)], frame, decoded)
 
-    def final_blob(self, group: str, frame: bytes) -> list[str]:
-        """``final-blob`` when the refused defect lies in a string or ``uint8[]`` that ends the type: the reference
-        had read that field's length prefix when it refused."""
-        m = self.view[self.types[group]]
-        last = m.fields[-1] if m.fields else None
-        if last is None or not (last.type.base == "string" and last.type.array is None
-                                or last.type.base == "uint8" and last.type.array is not None and last.type.array < 0):
+    def final_blob(self, group: str, frame: bytes, exc: FrameError) -> list[str]:
+        """``final-blob`` when the refused defect is a string or ``uint8[]`` length past the end that is the last
+        thing the type reads (what genpy slices unchecked, erratum G1): with that length cut to the bytes left, the
+        frame decodes."""
+        if exc.rule not in ("length-overrun", "truncated"):
             return []
-        spans: list = []
+        prefix = exc.offset if exc.rule == "length-overrun" else exc.offset - 4
+        if prefix < 0 or prefix + 4 > len(frame):
+            return []
+        clamped = bytearray(frame)
+        struct.pack_into("<I", clamped, prefix, len(frame) - prefix - 4)
         try:
-            codec.decode(self.view, m.full, frame, spans)
+            codec.decode(self.view, self.types[group], bytes(clamped))
         except FrameError:
-            pass
-        return ["final-blob"] if any(s.path == f"{m.name}.{last.name}.length" for s in spans) else []
+            return []
+        return ["final-blob"]
 
     def record(self, group: str, expect: str, clause: str, checks: list[str], tags: list[str], frame: bytes,
                message: dict | None = None, **extra) -> dict:
@@ -167,12 +169,15 @@ class RosFuzzSource:
 
     def tags(self, message: dict) -> list[str]:
         """What a decoded message holds that errata are filed by: ``time-secs-from-2^31`` (a ``time`` whose secs do
-        not fit a signed 32-bit integer)."""
+        not fit a signed 32-bit integer), ``float32-signaling-nan`` (a NaN whose quiet bit is clear: only a float32
+        can hold the 8-hex-digit form)."""
         out = set()
         stack = [message["fields"]]
         while stack:
             value = stack.pop()
-            if isinstance(value, dict):
+            if isinstance(value, str) and value.startswith("nan:") and len(value) == 12 and not int(value[4:], 16) & 0x400000:
+                out.add("float32-signaling-nan")
+            elif isinstance(value, dict):
                 if set(value) == {"secs", "nsecs"} and isinstance(value["secs"], int) and value["secs"] >= 1 << 31:
                     out.add("time-secs-from-2^31")
                 stack += list(value.values())

@@ -139,7 +139,7 @@ class RosSuite(DataSuite):
         from .fuzzing import RosFuzzSource
 
         return RosFuzzSource(self.defs.edition(edition), {t.name: t.full for t in self.defs.suite_types},
-                             {r["id"]: r["clause"] for r in self.rules}, valid_frames(cases))
+                             {r["id"]: r["clause"] for r in self.rules}, valid_frames(cases, edition))
 
     def mutants(self, edition: str | None = None) -> list:
         from ...fuzz.mutation import Mutant
