@@ -30,6 +30,7 @@ class Cell:
     verdict: str
     counts: str  # e.g. "120 PASS · 2 FAIL"
     differs: str = ""  # why this cell's selection differs from its row's other cells
+    errata: str = ""  # the documented errata that explain its failures
 
 
 @dataclass
@@ -42,13 +43,14 @@ class Table:
 
 
 def kind_of(result: RunResult) -> str:
+    """What a saved result holds: a capture's judgement, a fuzzing run, scenarios or byte vectors."""
     ids = [c.id for c in result.cases]
-    if any("/fuzz/" in i for i in ids):
+    if result.adapter == "capture":
+        return "captures"
+    if ids and all("/fuzz/" in i for i in ids):
         return "fuzzing"
     if any("/scenario/" in i or "/passive/" in i for i in ids):
         return "scenarios"
-    if result.adapter.startswith(("pcap:", "watch:")) or any("/capture/" in i for i in ids):
-        return "captures"
     return "vectors"
 
 
@@ -80,7 +82,8 @@ def build(results: list[tuple[str, RunResult]], by_case: bool) -> list[Table]:
                 counts = Counter(c.verdict for c in m.cases)
                 text = " · ".join(f"{n} {v.value}" for v, n in sorted(counts.items(), key=lambda x: x[0].value))
                 differs = "" if chosen == common else f"{len(chosen)} cases, not the {len(common)} of the others"
-                cells.append(Cell(m.verdict, text, differs))
+                errata = ", ".join(sorted({e for c in m.cases for e in c.errata}))
+                cells.append(Cell(m.verdict, text, differs, errata))
             table.rows.append((name, cells))
     return list(tables.values())
 
@@ -103,6 +106,7 @@ def render_markdown(tables: list[Table], by_case: bool) -> str:
                     shown.append("—")
                 else:
                     text = f"**{c.verdict}**" + (f" ({cell(c.counts)})" if c.counts else "")
+                    text += f" errata {cell(c.errata)}" if c.errata else ""
                     shown.append(text + (f" ≠ {cell(c.differs)}" if c.differs else ""))
             lines.append(f"| {cell(name)} | " + " | ".join(shown) + " |")
         lines.append("")
