@@ -42,7 +42,8 @@ benchmark: $(VENV)/.installed
 	$(VENV)/bin/python -m imc_conformance.benchmark
 
 # DUNE (LSTS's IMC node) as a live target: built once from the imcpy sdist into the cache (10-30 min on 2 cores),
-# then the scenario set against it inside a private network namespace (needs root for unshare --net). Never in CI.
+# then the scenario set against it inside a private network namespace (needs root for unshare --net), then live
+# fuzzing (40 mutated frames a message; --fuzz-budget N to change it). Never in CI.
 dune: $(VENV)/.installed
 	$(VENV)/bin/python -m imc_conformance.suites.imc.dune build
 

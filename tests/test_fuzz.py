@@ -334,3 +334,40 @@ def test_the_errata_the_fuzzer_found_are_still_observed(suite_name, adapter, err
     (result,) = run_cases(session, suite, [Case(case["id"], group, "vector", case)], edition=edition,
                           adapter=adapter).cases
     assert result.verdict.value == "FAIL" and result.errata == [erratum]
+
+
+def test_live_fuzzing_names_the_generated_frame_that_silences_a_node(suite, cases):
+    """fuzz --target: mutated requests take the corpus's place in the robustness phase. A node that dies on any RAW
+    acoustic request is found, and bisected to a generated frame (on virtual time: the harness of the live tests)."""
+    import random
+
+    from live_harness import run_virtual
+
+    from imc_conformance.fuzz.engine import mutated_cases
+
+    source = suite.fuzz_source(EDITION, cases)
+    rng = random.Random("live")
+    generated = tuple(Case(i, i.split("/")[1], "vector", c)
+                      for i, (c, _) in mutated_cases(source, "AcousticRequest", rng, 300).items())
+    from live_harness import EVERYTHING
+
+    result, link = run_virtual(suite, cases, kinds=("robustness",), restartable=True, broken="dies-after-raw",
+                               options=dict(EVERYTHING, corpus=generated))
+    failed = {c.id: c for c in result.cases if c.verdict.value == "FAIL"}
+    assert "imc/AcousticRequest/robustness/still-served" in failed
+    assert "bisected: the frame imc/AcousticRequest/fuzz/" in failed["imc/AcousticRequest/robustness/still-served"].detail
+    assert link.restarts >= 1
+
+
+def test_live_fuzzing_needs_effects_allowed(capsys):
+    assert main(["fuzz", "--target", "udp://127.0.0.1:9"]) == 2
+    assert "--allow-effects" in capsys.readouterr().err
+
+
+def test_a_duration_ends_the_search_and_says_so(tmp_path, capsys):
+    report = tmp_path / "r.json"
+    assert main(["fuzz", "--adapter", "imcpy", "--in-process", "--budget", "1000000", "--duration", "1",
+                 "--json", str(report)]) == 0
+    notes = json.loads(report.read_text())["notes"]
+    assert any("stopped early: the duration was spent" in n for n in notes)
+    assert any("bounded by --duration" in n for n in notes)

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from ..errors import UsageError
-from .options import add_reports, add_suite, count, megabytes, positive_seconds, DEFAULT_MEMORY_MB
+from .options import DEFAULT_MEMORY_MB, add_reports, add_suite, add_target, count, megabytes, positive_seconds
 
 DEFAULT_BUDGET = 100
 
@@ -51,6 +51,9 @@ def add(sub) -> None:
     fuzz.add_argument("--promote", type=Path, metavar="FILE",
                       help="add the unexplained findings to this promoted-findings file (vectors/<suite>/promoted.json "
                            "in a checkout); imc-conformance generate makes them vectors")
+    live = fuzz.add_argument_group("live fuzzing (--target): mutated requests sent to a node, then the robustness "
+                                   "phase's probes find a request kind it stopped serving")
+    add_target(live, "fuzz (with --allow-effects: it sends requests)")
     add_reports(fuzz)
     fuzz.set_defaults(func=command)
 
@@ -74,7 +77,7 @@ def command(args) -> int:
     if args.budget == 0:
         raise UsageError("--budget 0 judges nothing: give a positive number of examples")
     adapter_arguments(args)
-    suite, everything = open_corpus(args.suite, None, frozenset(args.message) or None)
+    suite, everything = open_corpus(args.suite, None, None if args.target else frozenset(args.message) or None)
     edition = chosen_edition(suite, args.edition)
     unknown = set(args.message) - {g.name for g in suite.groups}
     if unknown:
@@ -84,6 +87,8 @@ def command(args) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
     groups = [g for g in source.groups if not args.message or g in args.message]
+    if args.target:
+        return live_fuzz(args, suite, everything, source, groups, edition, targets)
     chosen = [(name, suite.adapters[name].argv() if name in suite.adapters and suite.adapters[name].argv else None)
               for name in args.adapter] + [(cmd, split_command(cmd)) for cmd in args.adapter_cmd]
     if not chosen:
@@ -103,7 +108,8 @@ def command(args) -> int:
         started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
         began = time.monotonic()
         notes = [f"seed {args.seed}, budget {args.budget} examples per {suite.group_label} and property, edition "
-                 f"{edition}; rerun with the same seed and budget for the same findings"]
+                 f"{edition}; " + ("bounded by --duration: a rerun may judge more or fewer" if args.duration else
+                                   "rerun with the same seed and budget for the same findings")]
         if len(sessions) > 1:
             corpus = select_cases([c for c in everything if c.kind == "vector"], edition, groups)
             flagged = review({name: run_cases(s, suite, corpus, edition=edition, adapter=name)
@@ -152,3 +158,51 @@ def command(args) -> int:
         return 130
     return 2 if problems else (1 if unexplained(tally) else 0)
 
+
+
+def live_fuzz(args, suite, everything, source, groups, edition, targets) -> int:
+    """``fuzz --target``: ``--budget`` mutations of each message's corpus frames (seeded, no hypothesis) take the
+    corpus's place in the robustness phase, which sends them in paced blocks with the garbage after, probes every
+    request kind the node served before, and (with ``--restart-cmd``) bisects to the frame that silenced it."""
+    import random
+
+    from .. import live
+    from ..core.cases import Case
+    from ..core.runner import run_cases
+    from ..fuzz.engine import mutated_cases
+    from ..render.terminal import print_result
+    from .output import terminal, write_reports
+
+    if args.adapter or args.adapter_cmd:
+        raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd, not both")
+    if not args.allow_effects:
+        raise UsageError("fuzz --target sends generated requests to a live node: give --allow-effects (all, or the "
+                         "effects it may have), and never point it at a vehicle in service")
+    args.robustness, args.claims, args.dry_run = True, None, False
+    args.first_unique = live.first_unique()
+    try:
+        options = live.options(args, suite, everything)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    rng = random.Random(f"{args.seed}/{suite.name}/live")
+    generated = [Case(i, i.split("/")[1], "vector", case) for g in groups
+                 for i, (case, _) in mutated_cases(source, g, rng, args.budget).items()]
+    options["corpus"] = tuple(generated)
+    probes = [c for c in everything if c.kind == "robustness"]
+    if not probes:
+        raise UsageError(f"the suite {suite.name!r} has no robustness probes to tell a node that stopped answering")
+    notes = [f"live fuzzing: {len(generated)} mutated frames of {len(groups)} messages (seed {args.seed}, budget "
+             f"{args.budget} per message), then the garbage; every request kind served before is probed after each "
+             "block"] + live.notes(args, options)
+    try:
+        session = live.open_target(args, suite)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    try:
+        result = run_cases(session, suite, probes, edition=edition, adapter=args.target, options=options, notes=notes)
+    finally:
+        session.close()
+    console = terminal()
+    print_result(result, console)
+    problems = write_reports(result, targets, console)
+    return 2 if problems else result.exit_code()

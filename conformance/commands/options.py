@@ -169,6 +169,37 @@ def add_adapter(parser, *, what: str = "an implementation") -> None:
                              "that tries to allocate what a hostile length asks for fails instead of the machine")
 
 
+def add_target(live, what: str) -> None:
+    """A live target and how to treat it (``run`` and ``fuzz``): where it is, who the session is, what it may be
+    asked, how to restart it."""
+    live.add_argument("--target", metavar="URL", help=f"a live node to {what}: udp://HOST:PORT or "
+                                                      "imc+udp://HOST:PORT/ (IPv6 as udp://[::1]:PORT)")
+    live.add_argument("--bind", metavar="HOST[:PORT]", help="where the session listens (default: loopback, any port)")
+    live.add_argument("--src", type=system_id, default=None, metavar="ID",
+                      help="the session's own IMC id (default: one of 0x4C01-0x4CFE, chosen for the run); its second "
+                           "client takes the next id")
+    live.add_argument("--dst", type=system_id, default=None, metavar="ID",
+                      help="the node's IMC id: start at once instead of waiting for a frame from the node")
+    live.add_argument("--startup", type=startup_seconds, default=10.0, metavar="SECONDS",
+                      help="how long to wait for a first valid frame from the target (default 10)")
+    live.add_argument("--allow-multicast", action="store_true",
+                      help="allow a multicast or broadcast target or bind (never needed on loopback)")
+    live.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                      help="what a scenario needs from the target, e.g. peer=lauv-xplore-2 (list --scenarios names them)")
+    live.add_argument("--allow-effects", nargs="?", const="all", metavar="EFFECTS",
+                      help="send requests with side effects on the target: all, or a comma-separated list "
+                           "(default: only effect-free ones)")
+    live.add_argument("--profile", metavar="NAME", help="where deployed practice differs from the seeds (default seed)")
+    live.add_argument("--time-scale", type=time_scale, default=1.0, metavar="F",
+                      help="multiply every time bound by F (slow links)")
+    live.add_argument("--replay-effects", action="store_true",
+                      help="also send accepted frames of messages with effects (their destinations are the "
+                           "generator's own: never against a real vehicle)")
+    live.add_argument("--restart-cmd", metavar="CMD",
+                      help="a command that restarts the target (split like a shell would, never run by one): "
+                           "lets the robustness phase bisect to the frame that silenced it")
+
+
 def add_judging(parser) -> None:
     """The options pcap and watch share: what to judge against, which frames, how to report."""
     add_suite(parser)

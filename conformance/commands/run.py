@@ -10,7 +10,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import UsageError
-from .options import add_adapter, add_reports, add_selection, startup_seconds, system_id, time_scale
+from .options import add_adapter, add_reports, add_selection, add_target
 
 
 def add(sub) -> None:
@@ -24,40 +24,15 @@ def add(sub) -> None:
     run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     live = run.add_argument_group("scenarios and live targets")
-    live.add_argument("--target", metavar="URL", help="a live node to run the scenarios against: udp://HOST:PORT or "
-                                                      "imc+udp://HOST:PORT/ (IPv6 as udp://[::1]:PORT)")
-    live.add_argument("--bind", metavar="HOST[:PORT]", help="where the session listens (default: loopback, any port)")
-    live.add_argument("--src", type=system_id, default=None, metavar="ID",
-                      help="the session's own IMC id (default: one of 0x4C01-0x4CFE, chosen for the run); its second "
-                           "client takes the next id")
-    live.add_argument("--dst", type=system_id, default=None, metavar="ID",
-                      help="the node's IMC id: start at once instead of waiting for a frame from the node")
-    live.add_argument("--startup", type=startup_seconds, default=10.0, metavar="SECONDS",
-                      help="how long to wait for a first valid frame from the target (default 10)")
-    live.add_argument("--allow-multicast", action="store_true",
-                      help="allow a multicast or broadcast target or bind (never needed on loopback)")
-    live.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                      help="what a scenario needs from the target, e.g. peer=lauv-xplore-2 (list --scenarios names them)")
-    live.add_argument("--allow-effects", nargs="?", const="all", metavar="EFFECTS",
-                      help="run scenarios with side effects on the target: all, or a comma-separated list "
-                           "(default: only effect-free scenarios)")
+    add_target(live, "run the scenarios against")
     live.add_argument("--claims", metavar="FILE", help='JSON {"services": [...]}: the services the target implements; '
                                                        "scenarios of other services are UNSUPPORTED")
-    live.add_argument("--profile", metavar="NAME", help="where deployed practice differs from the seeds (default seed)")
-    live.add_argument("--time-scale", type=time_scale, default=1.0, metavar="F",
-                      help="multiply every time bound by F (slow links)")
     live.add_argument("--pcap", metavar="FILE", help="write every datagram of the run as pcapng, each commented "
                                                      "with its scenario and step (imc-conformance pcap replays it)")
     live.add_argument("--dry-run", action="store_true", help="print what the scenarios would send, and send nothing")
     live.add_argument("--robustness", action="store_true",
                       help="also run the robustness phase: every corpus frame, then 10,000 garbage datagrams, "
                            "after which every request kind answered before must still be answered")
-    live.add_argument("--replay-effects", action="store_true",
-                      help="with --robustness: also replay the corpus's accepted frames of messages with effects "
-                           "(their destinations are the corpus's own: never against a real vehicle)")
-    live.add_argument("--restart-cmd", metavar="CMD",
-                      help="a command that restarts the target (split like a shell would, never run by one): "
-                           "lets the robustness phase bisect to the frame that silenced it")
     add_reports(run)
     run.set_defaults(func=command)
 

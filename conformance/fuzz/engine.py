@@ -77,6 +77,25 @@ class Tally:
     stopped: str | None = None  # why the search ended early, if it did
 
 
+def seed_frames(source, group: str) -> list[tuple[str, bytes]]:
+    """The group's corpus frames, shortest first (the order shrinking tries them in)."""
+    return sorted(source.seed_frames(group), key=lambda ef: (len(ef[1]), ef))
+
+
+def mutated_cases(source, group: str, rng: random.Random, count: int) -> dict[str, tuple[dict, tuple]]:
+    """``count`` mutations of the group's corpus frames drawn from ``rng`` (no hypothesis), as cases by id (each
+    once) with the mutation and choices that made them; frames the reference does not judge are left out."""
+    seeds = seed_frames(source, group)
+    out: dict[str, tuple[dict, tuple]] = {}
+    for _ in range(count if seeds else 0):
+        encoding, frame = rng.choice(seeds)
+        mutation, a, b = rng.choice(source.mutations), rng.randrange(1 << 16), rng.randrange(1 << 16)
+        case = source.frame_case(group, encoding, source.mutate(group, frame, encoding, mutation, a, b), mutation)
+        if case is not None:
+            out.setdefault(case["id"], (case, (mutation, a, b)))
+    return out
+
+
 def _size(case: dict) -> int:
     return min(len(h) for h in case["frames"].values())
 
@@ -146,19 +165,11 @@ class Search:
 
         rng = random.Random(f"{self.seed}/{self.suite.name}/sweep")
         for group in groups:
-            seeds = sorted(self.source.seed_frames(group), key=lambda ef: (len(ef[1]), ef))
+            seeds = seed_frames(self.source, group)
             if not seeds:
                 continue
-            key = (group, "sweep")
-            drawn = [(*rng.choice(seeds), rng.choice(self.source.mutations), rng.randrange(1 << 16),
-                      rng.randrange(1 << 16)) for _ in range(per_group)]
-            cases = {}
-            for encoding, frame, mutation, a, b in drawn:
-                case = self.source.frame_case(group, encoding, self.source.mutate(group, frame, encoding, mutation, a, b),
-                                              mutation)
-                if case is not None:
-                    cases.setdefault(case["id"], (case, (mutation, a, b)))
-            self.tally.judged[key] = len(cases)
+            cases = mutated_cases(self.source, group, rng, per_group)
+            self.tally.judged[(group, "sweep")] = len(cases)
             batch = [Case(i, i.split("/")[1], "vector", c) for i, (c, _) in cases.items()]
             results: dict[str, dict] = {}
             for name, session in self.sessions.items():

@@ -5,7 +5,8 @@ It runs inside a private network namespace it creates (``unshare -n``: loopback 
 nothing outside reachable), because DUNE announces itself on a multicast group and its acoustic modem simulator
 talks over another. There it starts the Iridium gateway stand-in, DUNE's acoustic peer and DUNE as the vehicle,
 runs ``imc-conformance run --target`` once per profile (vehicle and peer restarted fresh in between; the
-robustness phase restarts both to bisect), captures the exchange on loopback, stops everything it started by PID and checks that
+robustness phase restarts both to bisect), then ``imc-conformance fuzz --target`` (live fuzzing, ``--fuzz-budget``
+mutated frames a message, ``reports/dune-fuzz.{json,html}``), captures the exchange on loopback, stops everything it started by PID and checks that
 no DUNE process is left. It writes ``reports/dune-<profile>.{json,html}``, the session's own recording of each run
 ``reports/dune-<profile>.pcapng`` (``imc-conformance pcap`` replays it) and everything on the IMC ports of loopback
 (DUNE's traffic with its peer too) in ``reports/dune-exchange.pcap``, then runs
@@ -34,12 +35,18 @@ CLAIMS = {"description": "What DUNE (lauv-simulator-1, as configured here) imple
                          "SmsRequest, for a GSM modem on a serial port).",
           "services": ["acoustic", "lbl", "iridium", "historic-data", "discovery"]}
 CAPTURED_PORTS = {UDP_PORT, *range(30100, 30105)}
+FUZZ_BUDGET = 40
+ACOUSTIC_WARMUP = 30.0  # seconds after a (re)start before DUNE's acoustic tasks and modem simulator serve requests
 
 
 def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="make dune-conformance", description=__doc__.splitlines()[0])
     parser.add_argument("--reports", type=Path, default=Path("reports"), help="where to write the reports")
     parser.add_argument("--no-robustness", action="store_true", help="the scenarios only (faster)")
+    parser.add_argument("--fuzz-budget", type=int, default=FUZZ_BUDGET, metavar="N",
+                        help=f"then live fuzzing: N mutated frames of each message's corpus frames, the robustness "
+                             f"phase's probes and bisection (default {FUZZ_BUDGET}; 0: none)")
+    parser.add_argument("--fuzz-only", action="store_true", help="only the live fuzzing (no scenario runs)")
     parser.add_argument("--checkout", type=Path, default=Path.cwd(), help="the checkout holding tests/")
     args = parser.parse_args(argv)
     if not built():
@@ -100,11 +107,18 @@ def _run(args) -> int:
     start(run, "vehicle", dune_argv("vehicle"))
     codes = {}
     try:
-        for i, profile in enumerate(PROFILES):
+        for i, profile in enumerate(() if args.fuzz_only else PROFILES):
             if i:
                 _restart_both(run)
             codes[profile] = _suite(args, run, profile)
             if codes[profile] == 130:  # the run was interrupted (Ctrl-C, SIGTERM): so is the whole job
+                raise KeyboardInterrupt
+        if args.fuzz_budget:
+            if codes:
+                _restart_both(run)
+            time.sleep(ACOUSTIC_WARMUP)  # the probes' baseline needs the acoustic service up, which DUNE starts late
+            codes["fuzz"] = _fuzz(args, run)
+            if codes["fuzz"] == 130:
                 raise KeyboardInterrupt
     except KeyboardInterrupt:
         print("make dune-conformance: interrupted", file=sys.stderr)
@@ -123,7 +137,7 @@ def _run(args) -> int:
     (args.reports / "dune-run.json").write_text(json.dumps({"wall_seconds": round(wall), "exit_codes": codes}) + "\n")
     if any(code not in (0, 1) for code in codes.values()):
         return 2  # a run that could not judge DUNE (usage, adapter, nothing tested)
-    return _expectations(args)
+    return 0 if args.fuzz_only else _expectations(args)
 
 
 def _isolate() -> str | None:
@@ -154,6 +168,20 @@ def _suite(args, run: Path, profile: str) -> int:
     if not args.no_robustness:  # a simulated vehicle: the corpus's own destinations are harmless here
         argv += ["--robustness", "--replay-effects", "--restart-cmd", restart_cmd]
     print(f"== {profile} profile: imc-conformance {' '.join(argv)}", flush=True)
+    return cli(argv)
+
+
+def _fuzz(args, run: Path) -> int:
+    """Live fuzzing of the vehicle: mutated requests of every message in place of the corpus in the robustness phase
+    (seed 0, ``--fuzz-budget`` frames a message), both restarted to bisect; its exit code."""
+    from ....cli import main as cli
+
+    argv = ["fuzz", "--target", f"udp://127.0.0.1:{UDP_PORT}", "--startup", "40", "--allow-effects", "--replay-effects",
+            "--restart-cmd", f"{sys.executable} -m imc_conformance.suites.imc.dune restart --run {run}",
+            "--param", f"peer={PEER}", "--param", f"beacon={PEER}", "--param", "sms_number=+351000000000",
+            "--param", f"remote_system={PEER_ID:#06x}", "--seed", "0", "--budget", str(args.fuzz_budget),
+            "--json", str(args.reports / "dune-fuzz.json"), "--html", str(args.reports / "dune-fuzz.html")]
+    print(f"== live fuzzing: imc-conformance {' '.join(argv)}", flush=True)
     return cli(argv)
 
 
