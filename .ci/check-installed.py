@@ -62,6 +62,16 @@ with tempfile.TemporaryDirectory() as folder:
     report = here / "capture.json"
     run("pcap", str(CAPTURE), "--json", str(report), ok=(0, 1))
     judged(report, f"the capture {CAPTURE.name} (DUNE's own failures in it)", explained=False)
+    report = here / "fuzz.json"  # a library adapter in its worker process, from the wheel: every finding explained
+    run("fuzz", "--adapter", "imcpy", "--adapter", "pyimclsts", "--message", "LblRange", "--budget", "40",
+        "--json", str(report))
+    judged(report, "fuzzing LblRange, imcpy against pyimclsts")
+    mutants = run("mutants", "--mutant", "crc-ccitt", "--mutant", "trims-trailing-spaces", "--mutant", "le-only").stdout
+    print(mutants.strip().splitlines()[-1])
+    matrix = here / "matrix.md"
+    run("matrix", str(here / "imcpy.json"), str(here / "rosbags.json"), str(report), "--markdown", str(matrix))
+    if matrix.read_text().count("## ") != 2:
+        problems.append("the matrix of an IMC and a ros_acomms result does not hold two tables")
 
 if problems:
     print("\n".join(problems), file=sys.stderr)

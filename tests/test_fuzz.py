@@ -156,7 +156,7 @@ def test_the_same_seed_gives_the_same_findings(imc, defs):
 
 def test_a_correct_implementation_has_no_finding(imc, defs):
     tally = search(imc, mutants.Reference(defs), ["Announce", "HistoricData"], budget=40)
-    assert tally.findings == [] and all(n == 40 for n in tally.judged.values())
+    assert tally.findings == [] and all(30 <= n <= 40 for n in tally.judged.values())  # too large to frame: not judged
 
 
 def test_several_implementations_are_classified(imc, defs):

@@ -54,6 +54,13 @@ def float_strategy(f: FieldDef):
     return st.one_of(st.floats(width=width, allow_nan=False), everyday, st.sampled_from(specials), nan_bits)
 
 
+def ascii_text(data: bytes) -> str:
+    return data.translate(TO_ASCII).decode("ascii")
+
+
+TO_ASCII = bytes(b & 0x7F for b in range(256))
+
+
 def _toward(x: float, direction: int) -> float:
     bits = struct.unpack("<i", struct.pack("<f", x))[0]
     bits += direction if x >= 0 else -direction
@@ -96,13 +103,13 @@ class ImcFuzzSource:
         if f.enum_kind == "bitfield":
             bits = [v.value for v in f.enum_values]
             return st.lists(st.sampled_from(bits), unique=True).map(_or)
-        if f.is_int:
+        if f.is_int:  # hypothesis's integers already favour the bounds, zero and small values
             lo, hi = f.int_bounds
-            return st.one_of(st.integers(lo, hi), st.sampled_from(sorted({lo, hi, 0, 1, -1 if lo < 0 else 0})))
+            return st.integers(lo, hi)
         if f.is_float:
             return float_strategy(f)
-        if f.type == "plaintext":
-            return st.text(st.characters(max_codepoint=0x7F), max_size=MAX_TEXT)
+        if f.type == "plaintext":  # drawn as bytes (one choice, not one per character), folded into ASCII
+            return st.binary(max_size=MAX_TEXT).map(ascii_text)
         if f.type == "rawdata":
             return st.binary(max_size=MAX_TEXT).map(bytes.hex)
         inner = self.inner_types(f)
@@ -159,9 +166,9 @@ class ImcFuzzSource:
 
     def frame_case(self, group: str, encoding: str, frame: bytes, mutation: str) -> dict | None:
         tags = ["fuzz", f"mutation:{mutation}"]
+        spans: list = []
         try:
-            spans = codec.layout(self.defs, frame)
-            decoded = codec.decode(self.defs, frame)
+            decoded = codec.decode(self.defs, frame, spans)
         except NotJudged:
             return None
         except FrameError as exc:

@@ -113,9 +113,9 @@ class RosFuzzSource:
     def frame_case(self, group: str, encoding: str, frame: bytes, mutation: str) -> dict | None:
         full = self.types[group]
         tags = ["fuzz", f"mutation:{mutation}"]
+        spans: list = []
         try:
-            spans = codec.layout(self.view, full, frame)
-            decoded = codec.decode(self.view, full, frame)
+            decoded = codec.decode(self.view, full, frame, spans)
         except FrameError as exc:
             return self.record(group, "invalid", self.clauses[exc.rule], [f"decode-{ENC}"],
                                ["invalid", f"rule:{exc.rule}", *tags, *self.final_blob(group, frame, exc)],
