@@ -371,3 +371,12 @@ def test_a_duration_ends_the_search_and_says_so(tmp_path, capsys):
     notes = json.loads(report.read_text())["notes"]
     assert any("stopped early: the duration was spent" in n for n in notes)
     assert any("bounded by --duration" in n for n in notes)
+
+
+def test_a_fuzzing_result_is_a_result_document_that_report_and_matrix_read(tmp_path, capsys):
+    report, html = tmp_path / "fuzz.json", tmp_path / "fuzz.html"
+    main(["fuzz", "--adapter", "imcpy", "--adapter", "pyimclsts", "--message", "LblRange", "--budget", "10",
+          "--json", str(report)])
+    assert main(["report", str(report), "--html", str(html)]) in (0, 1)
+    assert main(["matrix", str(report), "--markdown", str(tmp_path / "m.md")]) == 0
+    assert "(fuzzing)" in (tmp_path / "m.md").read_text()

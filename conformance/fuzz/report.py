@@ -1,7 +1,7 @@
 """A fuzzing run in the one result model, so that every renderer reports it as it reports ``run``.
 
-Each finding is a case (``<suite>/<group>/fuzz/<hash>``) whose checks are every implementation's checks, named
-``<implementation>: <check>``, with the classification as their note; a group and property with no finding is one
+Each finding is a case (``<suite>/<group>/fuzz/<hash>``) whose checks are every implementation's checks, their
+detail starting with the implementation's name, with the classification as their note; a group and property with no finding is one
 PASS case (``<suite>/<group>/fuzz/<property>``) saying how many examples were judged.
 """
 
@@ -20,7 +20,7 @@ def finding_case(finding) -> CaseResult:
     for name, result in finding.results.items():
         for c in result.checks:
             given = c.expected or frames.get(c.check.rpartition("-")[2]) or next(iter(frames.values()), None)
-            checks.append(CheckResult(f"{name}: {c.check}", c.verdict, c.detail, c.outcome, given, c.actual,
+            checks.append(CheckResult(c.check, c.verdict, f"{name}: {c.detail}", c.outcome, given, c.actual,
                                       c.diffs, finding.classification, c.clause))
     deviating = [finding.results[n] for n in finding.deviating]
     verdict = worst(r.verdict for r in deviating) if deviating else Verdict.PASS
@@ -44,7 +44,7 @@ def fuzz_result(suite, source, tally, names: list[str], implementations: list[st
             detail = (f"{judged} generated {'messages' if prop == 'message' else 'frames'} judged: "
                       f"{'every implementation agrees' if len(names) > 1 else names[0] + ' agrees'} with the reference")
             filed[group].append(CaseResult(f"{suite.name}/{group}/fuzz/{prop}", group, Verdict.PASS, None,
-                                           source.clause(group), [CheckResult(prop, Verdict.PASS, detail)]))
+                                           source.clause(group), [CheckResult(f"fuzz:{prop}", Verdict.PASS, detail)]))
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], False), filed[g.name])
                 for g in suite.groups if g.name in filed]
     return RunResult(suite.name, suite.title, edition, " vs ".join(implementations), ",".join(names), False, started,
