@@ -380,3 +380,12 @@ def test_a_fuzzing_result_is_a_result_document_that_report_and_matrix_read(tmp_p
     assert main(["report", str(report), "--html", str(html)]) in (0, 1)
     assert main(["matrix", str(report), "--markdown", str(tmp_path / "m.md")]) == 0
     assert "(fuzzing)" in (tmp_path / "m.md").read_text()
+
+
+def test_a_sweep_with_findings_does_not_also_say_everything_agreed(tmp_path, capsys):
+    report = tmp_path / "sweep.json"
+    main(["fuzz", "--adapter", "pyimclsts", "--in-process", "--message", "LblRange", "--property", "message",
+          "--budget", "1", "--sweep", "200", "--json", str(report)])
+    cases = [c for m in json.loads(report.read_text())["messages"] for c in m["cases"]]
+    assert any(c["verdict"] == "FAIL" for c in cases)  # pyimclsts checks no CRC (P1): the sweep finds it
+    assert not any(c["id"] == "imc/LblRange/fuzz/sweep" for c in cases)

@@ -182,7 +182,7 @@ class Search:
                     continue
                 seen.add(sig)
                 case, found = self.smallest(group, seeds, how, sig, case, results[case_id])
-                self.tally.findings.append(Finding(case["id"].split("/")[1], "frame", case, found,
+                self.tally.findings.append(Finding(case["id"].split("/")[1], "sweep", case, found,
                                                    classify(list(self.sessions), found)))
 
     def smallest(self, group, seeds, how, sig, case, results):

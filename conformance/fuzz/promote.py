@@ -29,7 +29,8 @@ def entry(finding, seed: int, adapters: list[str], edition: str, version: str, t
         ((encoding, frame),) = case["frames"].items()
         mutation = next((t.split(":", 1)[1] for t in case["tags"] if t.startswith("mutation:")), "none")
         given = {"encoding": encoding, "frame": frame, "mutation": mutation}
-    return {"id": case["id"], "group": finding.group, "property": finding.prop, "input": given,
+    return {"id": case["id"], "group": finding.group, "property": "message" if finding.prop == "message" else "frame",
+            "input": given,
             "provenance": {"seed": seed, "adapters": adapters, "edition": edition, "date": today.isoformat(),
                            "rule": case.get("rule"), "finding": finding.classification,
                            "found_by": f"imc-conformance {version}"}}

@@ -1,8 +1,8 @@
 """A fuzzing run in the one result model, so that every renderer reports it as it reports ``run``.
 
 Each finding is a case (``<suite>/<group>/fuzz/<hash>``) whose checks are every implementation's checks, their
-detail starting with the implementation's name, with the classification as their note; a group and property with no finding is one
-PASS case (``<suite>/<group>/fuzz/<property>``) saying how many examples were judged.
+detail starting with the implementation's name, with the classification as their note; a group and property (or
+sweep) with no finding is one PASS case (``<suite>/<group>/fuzz/<property>``) saying how many examples were judged.
 """
 
 from __future__ import annotations
@@ -28,8 +28,7 @@ def finding_case(finding) -> CaseResult:
     explained = errata if deviating and all(r.errata for r in deviating) else []
     case = finding.case
     return CaseResult(case["id"], finding.group, verdict, next(iter(case["expect"].values())), case["clause"], checks,
-                      case.get("rule"),
-                      explained)
+                      case.get("rule"), explained)
 
 
 def fuzz_result(suite, source, tally, names: list[str], implementations: list[str], edition: str, *, started: str,
