@@ -32,7 +32,6 @@ The adapter reports the str imcpy gives; it does not recover the bytes from the 
 from __future__ import annotations
 
 import struct
-from functools import cache
 from importlib.metadata import version
 from math import isfinite
 from operator import attrgetter
@@ -45,12 +44,6 @@ from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits
 from imc_conformance.suites.imc.values import raw_bytes, text_bytes
 
 SUITE = "imc"
-
-
-@cache
-def implementation_name() -> str:
-    """How the hello names imcpy (package metadata is read once: a fuzzing run greets the adapter at every example)."""
-    return f"imcpy {version('imcpy')} (DUNE C++ codec, IMC {imcpy.constants.VERSION})"
 
 # Start of the text of a DUNE RuntimeError -> corpus rule (None: the text fits several rules).
 DUNE_ERRORS = {
@@ -143,7 +136,8 @@ class ImcpyAdapter:
         self._by_class = {c.cls: c for c in self._by_abbrev.values()}
 
     def hello(self) -> dict:
-        return {"implementation": implementation_name(), "suites": [SUITE], "byte_orders": ["le"], "errata": "imcpy"}
+        return {"implementation": f"imcpy {version('imcpy')} (DUNE C++ codec, IMC {imcpy.constants.VERSION})",
+                "suites": [SUITE], "byte_orders": ["le"], "errata": "imcpy"}
 
     def encode(self, suite: str, message: dict, byte_order: str) -> bytes:
         _check_suite(suite)

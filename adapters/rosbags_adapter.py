@@ -13,7 +13,6 @@ names against ``<pkg>/msg``). A type the typestore lacks is refused (``unknown-t
 from __future__ import annotations
 
 import struct
-from functools import cache
 from importlib.metadata import version
 from math import isfinite
 from pathlib import Path
@@ -31,12 +30,6 @@ from imc_conformance.suites.ros_acomms.msgtext import msg_text
 from imc_conformance.suites.ros_acomms.package_files import read_package
 
 SUITE = "ros_acomms"
-
-
-@cache
-def rosbags_version() -> str:
-    """rosbags' version (package metadata is read once: a fuzzing run greets the adapter at every example)."""
-    return version("rosbags")
 PACKAGE = "ros_acomms_msgs"
 DTYPES = {"bool": np.bool_, "int8": np.int8, "uint8": np.uint8, "int16": np.int16, "uint16": np.uint16,
           "int32": np.int32, "uint32": np.uint32, "int64": np.int64, "uint64": np.uint64, "float32": np.float32,
@@ -70,7 +63,7 @@ class RosbagsAdapter:
         self._readers: dict[str, list] = {}  # type -> [(name, convert out)]
 
     def hello(self) -> dict:
-        return {"implementation": f"rosbags {rosbags_version()} (typestore from {self.source})", "suites": [SUITE],
+        return {"implementation": f"rosbags {version('rosbags')} (typestore from {self.source})", "suites": [SUITE],
                 "encodings": ["ros1"], "errata": "rosbags"}
 
     def _typename(self, full) -> str:

@@ -9,6 +9,7 @@ validator and the code that walks a document all recurse.
 from __future__ import annotations
 
 import json
+import shlex
 from pathlib import Path
 
 from .limits import FILE_LIMIT, JSON_NESTING_LIMIT
@@ -66,3 +67,15 @@ def read_json(path: Path, limit: int = FILE_LIMIT) -> tuple[bytes, object]:
     """The bytes of a JSON file and its value; ValueError with the reason."""
     raw = read_bytes(path, limit)
     return raw, parse_json(raw, str(path))
+
+
+def command_argv(text: str, option: str, missing: str) -> list[str]:
+    """The argv of a command given on the command line (split like a shell would, never run by one); ValueError
+    naming ``option`` if it cannot be split or is empty (``missing``: what to give instead)."""
+    try:
+        argv = shlex.split(text)
+    except ValueError as exc:
+        raise ValueError(f"{option} cannot be split: {exc}") from None
+    if not argv:
+        raise ValueError(f"{option} is empty (an unset variable?): {missing}")
+    return argv

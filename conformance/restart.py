@@ -4,12 +4,12 @@ a shell, in a session of its own, bounded; its exit is what counts."""
 from __future__ import annotations
 
 import os
-import shlex
 import shutil
 import subprocess
 import threading
 
 from .escaping import printable
+from .inputs import command_argv
 
 RESTART_TIMEOUT = 120.0  # seconds a --restart-cmd may take
 TAIL_WAIT = 1.0  # seconds to read what a failed restart command wrote, when a node it started holds its stderr
@@ -17,12 +17,7 @@ TAIL_WAIT = 1.0  # seconds to read what a failed restart command wrote, when a n
 
 def restart_argv(text: str) -> list[str]:
     """The restart command's argv, its program found (a usage error now, not at the first bisection)."""
-    try:
-        argv = shlex.split(text)
-    except ValueError as exc:
-        raise ValueError(f"--restart-cmd cannot be split: {exc}") from None
-    if not argv:
-        raise ValueError("--restart-cmd is empty (an unset variable?): give the command that restarts the target")
+    argv = command_argv(text, "--restart-cmd", "give the command that restarts the target")
     program = argv[0]
     found = (os.path.isfile(program) and os.access(program, os.X_OK)) if os.sep in program else shutil.which(program)
     if not found:

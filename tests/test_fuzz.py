@@ -10,7 +10,6 @@ import textwrap
 
 import pytest
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
 from imc_conformance.cli import main
 from imc_conformance.core.cases import Case
@@ -389,3 +388,25 @@ def test_a_sweep_with_findings_does_not_also_say_everything_agreed(tmp_path, cap
     cases = [c for m in json.loads(report.read_text())["messages"] for c in m["cases"]]
     assert any(c["verdict"] == "FAIL" for c in cases)  # pyimclsts checks no CRC (P1): the sweep finds it
     assert not any(c["id"] == "imc/LblRange/fuzz/sweep" for c in cases)
+
+
+@pytest.mark.parametrize("content, message", [
+    ({"format": 1, "suite": "imc", "promoted": [1]}, "$.promoted[0]: 1 is not of type 'object'"),
+    ({"format": 1, "suite": "imc", "promoted": [{"id": "imc/LblRange/fuzz/0"}]}, "$.promoted[0]"),
+])
+def test_promote_refuses_a_file_that_breaks_its_schema_in_one_line(tmp_path, capsys, content, message):
+    bad = tmp_path / "promoted.json"
+    bad.write_text(json.dumps(content))
+    assert main(["fuzz", "--adapter", "imcpy", "--in-process", "--message", "Heartbeat", "--budget", "3",
+                 "--promote", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_database_that_is_not_a_folder_and_a_suite_without_probes_are_usage_errors(tmp_path, capsys):
+    afile = tmp_path / "file"
+    afile.write_text("")
+    assert main(["fuzz", "--adapter", "imcpy", "--in-process", "--database", str(afile)]) == 2
+    assert "not a folder" in capsys.readouterr().err
+    assert main(["fuzz", "--suite", "ros_acomms", "--target", "udp://127.0.0.1:9", "--allow-effects"]) == 2
+    assert "cannot be fuzzed live" in capsys.readouterr().err

@@ -6,7 +6,6 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import inspect
-import shlex
 import sys
 from pathlib import Path
 
@@ -52,22 +51,26 @@ def adapter_choice(args, suite) -> tuple[str, list[str] | None]:
     """The adapter's name and, for a subprocess adapter, its argv; usage errors for an ambiguous choice."""
     if args.adapter_cmd is None:
         name = args.adapter or next(iter(suite.adapters))
-        builtin = suite.adapters.get(name)
-        return name, builtin.argv() if builtin is not None and builtin.argv is not None else None
+        return name, builtin_argv(name, suite)
     if args.adapter is not None:
         raise UsageError("give either --adapter or --adapter-cmd, not both")
     return args.adapter_cmd, split_command(args.adapter_cmd)
 
 
+def builtin_argv(name: str, suite) -> list[str] | None:
+    """The command line of a built-in subprocess adapter (a shim), or None for a library adapter."""
+    builtin = suite.adapters.get(name)
+    return builtin.argv() if builtin is not None and builtin.argv is not None else None
+
+
 def split_command(cmd: str) -> list[str]:
     """The argv of an --adapter-cmd (split like a shell would, never run by one); a usage error if there is none."""
+    from ..inputs import command_argv
+
     try:
-        argv = shlex.split(cmd)
+        return command_argv(cmd, "--adapter-cmd", "give the adapter program to run")
     except ValueError as exc:
-        raise UsageError(f"--adapter-cmd cannot be split: {exc}") from exc
-    if not argv:
-        raise UsageError("--adapter-cmd is empty (an unset variable?): give the adapter program to run")
-    return argv
+        raise UsageError(str(exc)) from None
 
 
 def adapter_arguments(args) -> dict[str, str]:

@@ -69,7 +69,7 @@ def command(args) -> int:
     from ..fuzz.report import fuzz_result, review, unexplained
     from ..render.terminal import print_result
     from ..core.hello import check_hello
-    from .adapters import adapter_arguments, open_session, split_command
+    from .adapters import adapter_arguments, builtin_argv, open_session, split_command
     from .options import chosen_edition
     from .output import report_targets, terminal, write_reports
 
@@ -89,13 +89,20 @@ def command(args) -> int:
     groups = [g for g in source.groups if not args.message or g in args.message]
     if args.target:
         return live_fuzz(args, suite, everything, source, groups, edition, targets)
-    chosen = [(name, suite.adapters[name].argv() if name in suite.adapters and suite.adapters[name].argv else None)
-              for name in args.adapter] + [(cmd, split_command(cmd)) for cmd in args.adapter_cmd]
+    chosen = [(name, builtin_argv(name, suite)) for name in args.adapter] + [
+        (cmd, split_command(cmd)) for cmd in args.adapter_cmd]
     if not chosen:
         chosen = [(next(iter(suite.adapters)), None)]
     names = [name for name, _ in chosen]
     if len(set(names)) != len(names):
         raise UsageError("an implementation is named twice")
+    database = None
+    if args.database is not None:
+        if args.database.exists() and not args.database.is_dir():
+            raise UsageError(f"--database {args.database}: not a folder (hypothesis keeps one file per example)")
+        from hypothesis.database import DirectoryBasedExampleDatabase
+
+        database = DirectoryBasedExampleDatabase(str(args.database))
     sessions = {}
     try:
         for name, argv in chosen:
@@ -118,11 +125,6 @@ def command(args) -> int:
                          f"erratum to explain it{': ' + ', '.join(flagged[:20]) if flagged else ''}"
                          f"{' ...' if len(flagged) > 20 else ''}")
         until = began + args.duration if args.duration else None
-        database = None
-        if args.database is not None:
-            from hypothesis.database import DirectoryBasedExampleDatabase
-
-            database = DirectoryBasedExampleDatabase(str(args.database))
         search = Search(suite, source, sessions, edition, seed=args.seed, budget=args.budget, database=database,
                         until=until)
         try:
@@ -178,6 +180,9 @@ def live_fuzz(args, suite, everything, source, groups, edition, targets) -> int:
     if not args.allow_effects:
         raise UsageError("fuzz --target sends generated requests to a live node: give --allow-effects (all, or the "
                          "effects it may have), and never point it at a vehicle in service")
+    if "robustness" not in suite.kinds:
+        raise UsageError(f"the suite {suite.name!r} has no robustness probes to tell a node that stopped answering: "
+                         "it cannot be fuzzed live")
     args.robustness, args.claims, args.dry_run = True, None, False
     args.first_unique = live.first_unique()
     try:
@@ -189,8 +194,6 @@ def live_fuzz(args, suite, everything, source, groups, edition, targets) -> int:
                  for i, (case, _) in mutated_cases(source, g, rng, args.budget).items()]
     options["corpus"] = tuple(generated)
     probes = [c for c in everything if c.kind == "robustness"]
-    if not probes:
-        raise UsageError(f"the suite {suite.name!r} has no robustness probes to tell a node that stopped answering")
     notes = [f"live fuzzing: {len(generated)} mutated frames of {len(groups)} messages (seed {args.seed}, budget "
              f"{args.budget} per message), then the garbage; every request kind served before is probed after each "
              "block"] + live.notes(args, options)

@@ -32,7 +32,7 @@ def command(args) -> int:
             result = read_result(path)
         except ValueError as exc:
             raise UsageError(str(exc)) from exc
-        label = label if sep else result.adapter
+        label = label if sep and label else result.adapter
         if label in labels:
             label = f"{label} ({path.name})"
         labels.add(label)

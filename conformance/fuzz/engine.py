@@ -125,7 +125,6 @@ class Search:
         self.seed, self.budget, self.database, self.until = seed, budget, database, until
         self.max_findings, self.first_only = max_findings, first_only
         self.tally = Tally()
-        self.groups = {g.name for g in suite.groups}
 
     def judge(self, case: dict) -> dict[str, CaseResult]:
         """Every session's result on one case, through the runner (the corpus's own verdict policy and errata)."""

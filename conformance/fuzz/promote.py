@@ -37,12 +37,19 @@ def entry(finding, seed: int, adapters: list[str], edition: str, version: str, t
 
 
 def read(path: Path, suite: str) -> list[dict]:
-    """The promoted records of ``path`` (none if it does not exist yet); ValueError if it is not one of ours."""
+    """The promoted records of ``path`` (none if it does not exist yet), checked against their schema; ValueError
+    naming the problem if it is not a promoted-findings file of ``suite``."""
+    from ..files import schema_error
+    from ..paths import VECTORS
+
     if not path.exists():
         return []
     _, doc = read_json(path)
-    if not isinstance(doc, dict) or doc.get("suite") != suite or not isinstance(doc.get("promoted"), list):
+    if not isinstance(doc, dict) or doc.get("suite") != suite:
         raise ValueError(f"{path} is not a promoted-findings file of the suite {suite!r}")
+    problem = schema_error(VECTORS / "schema" / SCHEMA, doc, str(path))
+    if problem:
+        raise ValueError(problem)
     return doc["promoted"]
 
 
@@ -63,21 +70,6 @@ def merge(path: Path, suite: str, records: list[dict]) -> int:
     temporary.write_text(json.dumps(doc, indent=1, ensure_ascii=True) + "\n", encoding="utf-8")
     os.replace(temporary, path)
     return len(fresh)
-
-
-def load(folder: Path, suite: str) -> list[dict]:
-    """The promoted records of a suite's data folder, checked against their schema (ValueError naming the problem)."""
-    from ..files import schema_error
-    from ..paths import VECTORS
-
-    path = folder / "promoted.json"
-    records = read(path, suite)
-    if records:
-        _, doc = read_json(path)
-        problem = schema_error(VECTORS / "schema" / SCHEMA, doc, str(path))
-        if problem:
-            raise ValueError(problem)
-    return records
 
 
 def promoted_cases(records: list[dict], sources: dict[str, object]) -> dict[str, list[dict]]:

@@ -51,6 +51,11 @@ def sized_lists(element, largest: int):
     return st.integers(0, largest).flatmap(lambda n: st.lists(element, min_size=n, max_size=n))
 
 
+def pins_nan(message: dict) -> dict | None:
+    """The comparison policy of a case holding a NaN with a payload (``"nan:<bits>"``): its bits are compared."""
+    return {"nan_payload": True} if b'"nan:' in orjson.dumps(message) else None
+
+
 def case_id(suite: str, group: str, case: dict) -> str:
     """``<suite>/<group>/fuzz/<hash>``: the hash of the case's inputs (frames, message, checks), so that the same
     finding always gets the same id and promoting it twice adds it once."""

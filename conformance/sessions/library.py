@@ -46,12 +46,20 @@ class LibrarySession:
 
     def __init__(self, adapter, name: str):
         self.adapter, self.name = adapter, name
+        self._hello: dict | None = None
 
     def hello(self):
-        try:
-            return self.adapter.hello()
-        except Exception as exc:  # any failure of the adapter's own hello
-            raise AdapterStartError(f"the adapter's hello failed: {type(exc).__name__}: {exc}") from exc
+        """The adapter's hello, asked once (as a subprocess is greeted once): a fuzzing run judges one example per
+        run, and an adapter may read package metadata to answer."""
+        if self._hello is None:
+            try:
+                answer = self.adapter.hello()
+            except Exception as exc:  # any failure of the adapter's own hello
+                raise AdapterStartError(f"the adapter's hello failed: {type(exc).__name__}: {exc}") from exc
+            self._hello = answer if isinstance(answer, dict) else None
+            if self._hello is None:
+                return answer  # not a greeting: check_hello says what is wrong with it
+        return dict(self._hello)
 
     def run(self, jobs: Iterable[Job]) -> Iterator[tuple[Job, Answer]]:
         decoded: dict[str, Answer] = {}  # by encoding, for the current case

@@ -6,12 +6,13 @@ from dataclasses import dataclass
 
 
 class FrameError(ValueError):
-    """Bytes the codec rejects: ``rule`` is the rule id they break, ``offset`` where it was found."""
+    """Bytes the codec rejects: ``rule`` is the rule id they break, ``offset`` where it was found, ``role`` what was
+    being read (a length, count or inline id) when the bytes ran out, where the codec says."""
 
-    def __init__(self, rule: str, offset: int, detail: str):
+    def __init__(self, rule: str, offset: int, detail: str, role: str | None = None):
         super().__init__(f"{rule} at byte {offset}: {detail}")
         self.rule, self.offset, self.detail = rule, offset, detail
-        self.role: str | None = None  # the part being read when the bytes ran out (a length, count or id), if known
+        self.role = role  # the part being read when the bytes ran out (a length, count or id), if known
 
 
 class NotJudged(ValueError):

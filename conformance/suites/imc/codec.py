@@ -159,10 +159,10 @@ class _Reader:
         self.pos = HEADER_SIZE
         self.depth = 0
 
-    def _take(self, count: int, rule: str, what: str) -> int:
+    def _take(self, count: int, rule: str, what: str, role: str | None = None) -> int:
         start = self.pos
         if start + count > self.end:
-            raise FrameError(rule, start, f"{what} needs {count} bytes, {self.end - start} left in the payload")
+            raise FrameError(rule, start, f"{what} needs {count} bytes, {self.end - start} left in the payload", role)
         self.pos += count
         return start
 
@@ -171,11 +171,7 @@ class _Reader:
             self.spans.append(Span(start, self.pos, path, type_, role))
 
     def _u16(self, rule: str, what: str, path: str, role: str) -> int:
-        try:
-            start = self._take(2, rule, what)
-        except FrameError as exc:
-            exc.role = role  # what was being read: a length, a count, an inline id
-            raise
+        start = self._take(2, rule, what, role)
         self._mark(start, path, "uint16_t", role)
         return struct.unpack_from(self.e + "H", self.frame, start)[0]
 

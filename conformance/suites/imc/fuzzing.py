@@ -15,10 +15,9 @@ from __future__ import annotations
 import struct
 from functools import cached_property
 
-import orjson
 from hypothesis import strategies as st
 
-from ...fuzz.source import case_id, sized_lists
+from ...fuzz.source import case_id, pins_nan, sized_lists
 from ...kinds.vector.errors import EncodeError, FrameError, NotJudged
 from ...kinds.vector.floats import FLOAT_CLASSES
 from . import codec
@@ -212,56 +211,53 @@ class ImcFuzzSource:
         case["id"] = case_id(self.suite, group, case)
         return case
 
+    def fields_of(self, message: dict):
+        """(message definition, field, value, depth) of every field of a decoded message, inline messages and list
+        elements included (iteratively: no recursion an input could drive)."""
+        stack = [(message, 0)]
+        while stack:
+            m, depth = stack.pop()
+            mdef = self.defs[m["abbrev"]]
+            for f in mdef.fields:
+                v = m["fields"][f.abbrev]
+                yield mdef, f, v, depth
+                if f.type in ("message", "message-list"):
+                    stack += [(x, depth + 1) for x in (v if isinstance(v, list) else [v]) if x is not None]
+
     def tags(self, message: dict) -> list[str]:
         """What a decoded message holds that errata are filed by: ``nonempty:<Message>.<field>`` for each inline
         field and list that holds something, ``nested`` when inline messages nest two deep, ``non-ascii`` text,
         ``fp32-signaling-nan`` (a NaN whose quiet bit is clear in an fp32 field)."""
         out: set[str] = set()
-        stack = [(message, 0)]
-        while stack:  # iterative: a decoded message's depth is bounded by the codec, but no recursion either way
-            m, depth = stack.pop()
-            mdef = self.defs[m["abbrev"]]
-            for f in mdef.fields:
-                v = m["fields"][f.abbrev]
-                if f.type == "plaintext" and isinstance(v, dict):
-                    out.add("non-ascii")
-                elif f.type == "fp32_t" and isinstance(v, str) and v.startswith("nan:") and not int(v[4:], 16) & 0x400000:
-                    out.add("fp32-signaling-nan")
-                elif f.type in ("message", "message-list"):
-                    inner = [x for x in (v if isinstance(v, list) else [v]) if x is not None]
-                    if inner:
-                        out.add(f"nonempty:{mdef.abbrev}.{f.abbrev}")
-                        if depth >= 1:
-                            out.add("nested")
-                    stack += [(x, depth + 1) for x in inner]
+        for mdef, f, v, depth in self.fields_of(message):
+            if f.type == "plaintext" and isinstance(v, dict):
+                out.add("non-ascii")
+            elif f.type == "fp32_t" and isinstance(v, str) and v.startswith("nan:") and not int(v[4:], 16) & 0x400000:
+                out.add("fp32-signaling-nan")
+            elif f.type in ("message", "message-list") and any(x is not None for x in (v if isinstance(v, list) else [v])):
+                out.add(f"nonempty:{mdef.abbrev}.{f.abbrev}")
+                if depth >= 1:
+                    out.add("nested")
         return sorted(out)
 
     def acceptable_reasons(self, message: dict) -> list[str]:
         """The implementation-defined contents of a decoded message (the corpus's acceptable classes), if any."""
         out: set[str] = set()
-        stack = [message]
-        while stack:
-            m = stack.pop()
-            mdef = self.defs[m["abbrev"]]
-            for f in mdef.fields:
-                v = m["fields"][f.abbrev]
-                if f.enum_kind == "enum" and v not in {e.value for e in f.enum_values if e.in_edition(self.edition)}:
-                    out.add("out-of-table")
-                elif f.enum_kind == "bitfield" and v & ~_or([e.value for e in f.enum_values]):
-                    out.add("undefined-bit")
-                elif f.is_float and (f.minimum is not None or f.maximum is not None) and not _within(f, v):
-                    out.add("out-of-range")
-                elif f.type == "plaintext" and isinstance(v, dict):
-                    out.add("non-ascii")
-                elif f.type in ("message", "message-list"):
-                    inner = v if isinstance(v, list) else [v]
-                    if f.type == "message-list" and None in inner:
-                        out.add("null-element")
-                    for x in inner:
-                        if x is not None:
-                            if f.message_types and x["abbrev"] not in f.message_types:
-                                out.add("wrong-type")
-                            stack.append(x)
+        for _, f, v, _ in self.fields_of(message):
+            if f.enum_kind == "enum" and v not in {e.value for e in f.enum_values if e.in_edition(self.edition)}:
+                out.add("out-of-table")
+            elif f.enum_kind == "bitfield" and v & ~_or([e.value for e in f.enum_values]):
+                out.add("undefined-bit")
+            elif f.is_float and (f.minimum is not None or f.maximum is not None) and not _within(f, v):
+                out.add("out-of-range")
+            elif f.type == "plaintext" and isinstance(v, dict):
+                out.add("non-ascii")
+            elif f.type in ("message", "message-list"):
+                inner = v if isinstance(v, list) else [v]
+                if f.type == "message-list" and None in inner:
+                    out.add("null-element")
+                if f.message_types and any(x is not None and x["abbrev"] not in f.message_types for x in inner):
+                    out.add("wrong-type")
         return sorted(out)
 
     # ------------------------------------------------------------ mutations
@@ -326,11 +322,6 @@ def framing_reasons(frame: bytes, spans) -> list[str]:
     if last < HEADER_SIZE + declared:
         out.append("unused-payload")
     return out
-
-
-def pins_nan(message: dict) -> dict | None:
-    """``{"nan_payload": true}`` when the message holds a NaN with a payload (its bits are then compared)."""
-    return {"nan_payload": True} if b'"nan:' in orjson.dumps(message) else None
 
 
 def _or(values) -> int:

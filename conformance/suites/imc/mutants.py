@@ -48,6 +48,14 @@ def rewrite_prefixes(defs, frame: bytes, byte_order: str, pick, change) -> bytes
     return with_footer(bytes(body), e)
 
 
+def retype(defs, pick, new_type: str):
+    """The definitions with every field that ``pick(message, field)`` selects given ``new_type`` (a drifted
+    definition, as a generator fed an edited IMC.xml produces)."""
+    messages = tuple(dataclasses.replace(m, fields=tuple(dataclasses.replace(f, type=new_type) if pick(m, f) else f
+                                                         for f in m.fields)) for m in defs.messages)
+    return dataclasses.replace(defs, messages=messages)
+
+
 class Reference:
     """The reference codec as a library adapter: correct, the baseline every mutant departs from."""
 
@@ -205,11 +213,11 @@ class PadsShortPayload(Stepwise):
     name = "pads-short-payload"
 
     class Reader(codec._Reader):
-        def _take(self, count, rule, what):
+        def _take(self, count, rule, what, role=None):
             missing = self.pos + count - self.end
             if rule == "field-overrun" and missing > 0:
                 self.frame, self.end = self.frame[:self.end] + bytes(missing), self.end + missing
-            return super()._take(count, rule, what)
+            return super()._take(count, rule, what, role)
 
 
 class ClampsLengths(Stepwise):
@@ -218,10 +226,10 @@ class ClampsLengths(Stepwise):
     name = "clamps-lengths"
 
     class Reader(codec._Reader):
-        def _take(self, count, rule, what):
+        def _take(self, count, rule, what, role=None):
             if rule == "length-overrun":
                 count = min(count, self.end - self.pos)
-            return super()._take(count, rule, what)
+            return super()._take(count, rule, what, role)
 
 
 class ListStopsAtPayloadEnd(Stepwise):
@@ -402,9 +410,7 @@ class RssiValueAsFp64(Reference):
     name = "rssi-value-as-fp64"
 
     def __init__(self, defs):
-        rssi = defs["RSSI"]
-        wide = dataclasses.replace(rssi, fields=tuple(dataclasses.replace(f, type="fp64_t") for f in rssi.fields))
-        super().__init__(dataclasses.replace(defs, messages=tuple(wide if m is rssi else m for m in defs.messages)))
+        super().__init__(retype(defs, lambda m, f: m.abbrev == "RSSI" and f.abbrev == "value", "fp64_t"))
 
 
 class SignedSrc(Stepwise):
@@ -427,14 +433,6 @@ class IgnoresTimestamp(Stepwise):
 
 
 # ---------------------------------------------------------------- more seeded bugs (the fuzzing issue's set)
-
-def retype(defs, pick, new_type: str):
-    """The definitions with every field that ``pick(message, field)`` selects given ``new_type`` (a drifted
-    definition, as a generator fed an edited IMC.xml produces)."""
-    messages = tuple(dataclasses.replace(m, fields=tuple(dataclasses.replace(f, type=new_type) if pick(m, f) else f
-                                                         for f in m.fields)) for m in defs.messages)
-    return dataclasses.replace(defs, messages=messages)
-
 
 class ValueMutant(Stepwise):
     """Base of the decoders that alter decoded field values: ``change(field, value)``."""
@@ -498,34 +496,33 @@ class CrcAlwaysBigEndian(Stepwise):
         return with_footer(super().encode_frame(message, byte_order)[:-FOOTER_SIZE], ">")
 
 
-class SizeCountsHeader(Stepwise):
+class SizeCountsMore(Stepwise):
+    """Base of the codecs whose size field counts ``extra`` bytes beyond the payload (written so, and read back so)."""
+
+    extra = 0
+
+    def payload_end(self, frame, size):
+        return super().payload_end(frame, max(0, size - self.extra))
+
+    def encode_frame(self, message, byte_order):
+        e = ORDERS[byte_order]
+        body = bytearray(super().encode_frame(message, byte_order)[:-FOOTER_SIZE])
+        struct.pack_into(e + "H", body, 4, (len(body) - HEADER_SIZE + self.extra) & 0xFFFF)
+        return with_footer(bytes(body), e)
+
+
+class SizeCountsHeader(SizeCountsMore):
     """The size field counts the 20 header bytes too (written so, and read back so)."""
 
     name = "size-counts-header"
-
-    def payload_end(self, frame, size):
-        return super().payload_end(frame, max(0, size - HEADER_SIZE))
-
-    def encode_frame(self, message, byte_order):
-        e = ORDERS[byte_order]
-        body = bytearray(super().encode_frame(message, byte_order)[:-FOOTER_SIZE])
-        struct.pack_into(e + "H", body, 4, (len(body) - HEADER_SIZE + HEADER_SIZE) & 0xFFFF)
-        return with_footer(bytes(body), e)
+    extra = HEADER_SIZE
 
 
-class SizeCountsFooter(Stepwise):
+class SizeCountsFooter(SizeCountsMore):
     """The size field counts the two footer bytes too (written so, and read back so)."""
 
     name = "size-counts-footer"
-
-    def payload_end(self, frame, size):
-        return super().payload_end(frame, max(0, size - FOOTER_SIZE))
-
-    def encode_frame(self, message, byte_order):
-        e = ORDERS[byte_order]
-        body = bytearray(super().encode_frame(message, byte_order)[:-FOOTER_SIZE])
-        struct.pack_into(e + "H", body, 4, (len(body) - HEADER_SIZE + FOOTER_SIZE) & 0xFFFF)
-        return with_footer(bytes(body), e)
+    extra = FOOTER_SIZE
 
 
 class ListCountU8(Stepwise):

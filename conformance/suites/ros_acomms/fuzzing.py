@@ -13,10 +13,9 @@ from __future__ import annotations
 
 import struct
 
-import orjson
 from hypothesis import strategies as st
 
-from ...fuzz.source import case_id, sized_lists
+from ...fuzz.source import case_id, pins_nan, sized_lists
 from ...kinds.vector.errors import EncodeError, FrameError
 from ...kinds.vector.floats import FLOAT_CLASSES
 from . import codec
@@ -125,7 +124,7 @@ class RosFuzzSource:
         used = max((s.end for s in spans), default=0)
         reasons = (["trailing-bytes"] if used < len(frame) else []) + [
             "bool-byte" for s in spans if s.type == "bool" and frame[s.start] > 1][:1]
-        if b'{"hex":' in orjson.dumps(decoded):
+        if any(isinstance(v, dict) and set(v) == {"hex"} for v in _values(decoded)):
             reasons.append("non-utf8")
         if reasons:
             return self.record(group, "acceptable", "ros-acomms#ros-1-serialization", [f"decode-{ENC}"],
@@ -160,8 +159,9 @@ class RosFuzzSource:
                 "checks": checks, "frames": {ENC: frame.hex()}}
         if message is not None:
             case["message"] = message
-            if b'"nan:' in orjson.dumps(message):
-                case["compare"] = {"nan_payload": True}
+            compare = pins_nan(message)
+            if compare:
+                case["compare"] = compare
         case.update(extra)
         case["tags"] = sorted(set(tags))
         case["id"] = case_id(self.suite, group, case)
@@ -172,17 +172,12 @@ class RosFuzzSource:
         not fit a signed 32-bit integer), ``float32-signaling-nan`` (a NaN whose quiet bit is clear: only a float32
         can hold the 8-hex-digit form)."""
         out = set()
-        stack = [message["fields"]]
-        while stack:
-            value = stack.pop()
+        for value in _values(message):
             if isinstance(value, str) and value.startswith("nan:") and len(value) == 12 and not int(value[4:], 16) & 0x400000:
                 out.add("float32-signaling-nan")
-            elif isinstance(value, dict):
-                if set(value) == {"secs", "nsecs"} and isinstance(value["secs"], int) and value["secs"] >= 1 << 31:
-                    out.add("time-secs-from-2^31")
-                stack += list(value.values())
-            elif isinstance(value, list):
-                stack += value
+            elif isinstance(value, dict) and set(value) == {"secs", "nsecs"} and isinstance(value["secs"], int) \
+                    and value["secs"] >= 1 << 31:
+                out.add("time-secs-from-2^31")
         return sorted(out)
 
     # ------------------------------------------------------------ mutations
@@ -216,15 +211,19 @@ class RosFuzzSource:
         return bytes(out)
 
 
-def _nsecs_over(message: dict) -> bool:
-    """Whether a decoded message holds a ``time`` or ``duration`` with a second or more in nsecs."""
+def _values(message: dict):
+    """Every value a decoded message holds, nested ones and array elements included (iteratively)."""
     stack = [message["fields"]]
     while stack:
         value = stack.pop()
+        yield value
         if isinstance(value, dict):
-            if set(value) == {"secs", "nsecs"} and isinstance(value["nsecs"], int) and abs(value["nsecs"]) >= SECOND:
-                return True
             stack += list(value.values())
         elif isinstance(value, list):
             stack += value
-    return False
+
+
+def _nsecs_over(message: dict) -> bool:
+    """Whether a decoded message holds a ``time`` or ``duration`` with a second or more in nsecs."""
+    return any(isinstance(v, dict) and set(v) == {"secs", "nsecs"} and isinstance(v["nsecs"], int)
+               and abs(v["nsecs"]) >= SECOND for v in _values(message))

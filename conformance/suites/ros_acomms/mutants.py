@@ -76,14 +76,19 @@ class HeaderWithoutSeq(Reference):
         return retyped(view, lambda full, f: None if full == "std_msgs/Header" and f.name == "seq" else f)
 
 
+def rebased(view: Edition, old: str, new: str) -> Edition:
+    """The edition with every field (arrays included) of builtin ``old`` taken for ``new``."""
+    return retyped(view, lambda full, f: dataclasses.replace(f, type=dataclasses.replace(f.type, base=new))
+                   if f.type.base == old else f)
+
+
 class Float32AsFloat64(Reference):
     """Every float32 field is a float64."""
 
     name = "float32-as-float64"
 
     def definitions(self, view):
-        return retyped(view, lambda full, f: dataclasses.replace(f, type=dataclasses.replace(f.type, base="float64"))
-                       if f.type.base == "float32" else f)
+        return rebased(view, "float32", "float64")
 
 
 class FixedArraysWithCount(Reference):
@@ -287,8 +292,7 @@ class Int8AsUint8(Reference):
     name = "int8-as-uint8"
 
     def definitions(self, view):
-        return retyped(view, lambda full, f: dataclasses.replace(f, type=dataclasses.replace(f.type, base="uint8"))
-                       if f.type.base == "int8" else f)
+        return rebased(view, "int8", "uint8")
 
 
 class DropsFifthArrayElement(ValueMutant):

@@ -41,7 +41,7 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
     examples = load_examples()
     files: dict[str, str] = {}
     per_message = {}
-    promoted = promoted_cases(promote.load(imc_data(), "imc"), {
+    promoted = promoted_cases(promote.read(imc_data("promoted.json"), "imc"), {
         e: ImcFuzzSource(defs, e, {r["id"]: r["clause"] for r in load_suite("imc").rules}) for e in defs.editions})
     for mdef in defs.suite_messages:
         mc = MessageCases(defs, mdef)

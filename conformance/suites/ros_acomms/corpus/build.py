@@ -262,7 +262,7 @@ def build_corpus(defs: RosDefinitions) -> dict[str, str]:
     clauses = {r["id"]: r["clause"] for r in rules}
     files, per_type = {}, {}
     groups = {t.name: t.full for t in defs.suite_types}
-    promoted = promoted_cases(promote.load(ros_data(), "ros_acomms"), {
+    promoted = promoted_cases(promote.read(ros_data("promoted.json"), "ros_acomms"), {
         e: RosFuzzSource(defs.edition(e), groups, clauses) for e in defs.editions})
     for t in defs.suite_types:
         cases = build_type(defs, t, examples.get(t.full, []), clauses) + promoted.get(t.name, [])
