@@ -18,17 +18,15 @@ import json
 import logging
 import os
 import struct
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 from imc_conformance.adapter_api import Rejected, Unsupported
 from imc_conformance.cache import cache_dir
+from imc_conformance.native import debian_packages, run
 from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits
 from imc_conformance.suites.ros_acomms.codec import int_form, int_value
-from imc_conformance.suites.ros_acomms.definitions import load_definitions
-from imc_conformance.suites.ros_acomms.package_files import package_texts, read_package
+from imc_conformance.suites.ros_acomms.package_files import source_files
 
 SUITE = "ros_acomms"
 PACKAGE = "ros_acomms_msgs"
@@ -38,45 +36,9 @@ FLOATS = {"float32": "f", "float64": "d"}
 INTS = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "byte", "char"}
 
 
-def run(argv: list, what: str, **options) -> subprocess.CompletedProcess:
-    try:
-        done = subprocess.run([str(a) for a in argv], capture_output=True, text=True, timeout=600, **options)
-    except (OSError, subprocess.TimeoutExpired) as exc:
-        raise RuntimeError(f"{what}: {exc}") from None
-    if done.returncode != 0:
-        tail = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
-        raise RuntimeError(f"{what} failed: {tail[0][:300]}")
-    return done
-
-
 def debian_genpy() -> tuple[Path, dict[str, str]]:
     """The unpacked Debian packages (downloaded once into the cache) and their versions."""
-    folder = cache_dir() / "debian-genpy"
-    marker = folder / "packages.json"
-    if marker.exists():
-        return folder / "root", json.loads(marker.read_text(encoding="utf-8"))
-    folder.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=folder) as tmp:
-        run(["apt-get", "download", *DEBS], "apt-get download of genpy's Debian packages (is the apt index there? "
-            "apt-get update)", cwd=tmp)
-        versions = {}
-        for deb in sorted(Path(tmp).glob("*.deb")):
-            run(["dpkg", "-x", deb, Path(tmp) / "root"], f"dpkg -x {deb.name}")
-            name, deb_version = deb.name.split("_")[:2]
-            versions[name] = deb_version.replace("%3a", ":")
-        (Path(tmp) / "root").replace(folder / "root")
-    marker.write_text(json.dumps(versions, indent=1), encoding="utf-8")
-    return folder / "root", versions
-
-
-def package_files(edition: str | None, msgs: str | None) -> dict[str, str]:
-    """Relative path -> text of the package's msg/ and srv/ files to generate classes from."""
-    if msgs is not None:
-        folder = Path(msgs)
-        read_package(folder)  # a syntax error is named by file and line before genpy sees the text
-        return {p.relative_to(folder).as_posix(): p.read_text(encoding="utf-8")
-                for p in sorted([*folder.glob("msg/*.msg"), *folder.glob("srv/*.srv")])}
-    return package_texts(load_definitions().edition(edition or "seed"), PACKAGE, lone_halves=True)[0]
+    return debian_packages("debian-genpy", DEBS)
 
 
 def generate(root: Path, versions: dict, files: dict[str, str]) -> Path:
@@ -107,7 +69,7 @@ class GenpyAdapter:
         if edition is not None and msgs is not None:
             raise ValueError("give edition or msgs, not both")
         root, self.versions = debian_genpy()
-        gen = generate(root, self.versions, package_files(edition, msgs))
+        gen = generate(root, self.versions, source_files(edition, msgs))
         for path in (str(root / DIST), str(gen)):
             if path not in sys.path:
                 sys.path.insert(0, path)

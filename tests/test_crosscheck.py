@@ -16,6 +16,7 @@ import pytest
 from harness import verdicts
 
 from imc_conformance.core.cases import expectation
+from imc_conformance.core.suite import erratum_keys
 from imc_conformance.core.verdicts import Verdict
 from imc_conformance.suites.imc import codec
 
@@ -31,7 +32,7 @@ def unexplained(suite, verdicts, implementation):
 
 def stale_globs(suite, verdicts, implementation):
     failing = [cid for cid, (v, _) in verdicts.items() if v not in PASSING]
-    return [(e["id"], g) for e in suite.errata if e.get("implementation") == implementation
+    return [(e["id"], g) for e in suite.errata if implementation in erratum_keys(e.get("implementation"))
             for g in e.get("cases", ()) if not fnmatch.filter(failing, g)]
 
 

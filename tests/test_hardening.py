@@ -89,7 +89,7 @@ def one_line_error(err: str, *fragments: str) -> None:
     (["--adapter-cmd", ""], "--adapter-cmd is empty"),
     (["--adapter-cmd", "   "], "--adapter-cmd is empty"),
     (["--adapter-cmd", "python3 'unbalanced"], "--adapter-cmd cannot be split: No closing quotation"),
-    (["--adapter", "imcpy", "--adapter-cmd", "python3 x.py"], "give either --adapter or --adapter-cmd"),
+    (["--adapter", "imcpy", "--adapter-cmd", "python3 x.py"], "give one of --adapter, --adapter-cmd, not several"),
 ])
 def test_an_ambiguous_or_empty_adapter_is_a_usage_error(args, fragment, capsys):
     assert main(["run", *args, "--no-progress", "--id", "imc/LblRange/minimal"]) == 2

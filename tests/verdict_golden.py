@@ -17,13 +17,13 @@ from pathlib import Path
 
 GOLDEN = Path(__file__).resolve().parent / "golden" / "verdicts"
 DATA = Path(__file__).resolve().parent / "data"
-IMC_ADAPTERS = ("imcpy", "pyimclsts", "imcpy-shim", "pyimclsts-shim")
+IMC_ADAPTERS = ("imcpy", "pyimclsts", "imcpy-shim", "pyimclsts-shim", "dune-cpp")
 RUNS = {  # name -> the command line (without --json)
     **{f"imc-{adapter}-{edition}": ["run", "--adapter", adapter, "--edition", edition]
        for adapter in IMC_ADAPTERS for edition in ("imc-5.4.30", "imc-5.4.11")},
     **{f"ros_acomms-{adapter}-{edition}": ["run", "--suite", "ros_acomms", "--adapter", adapter, "--edition", edition,
                                            "--adapter-arg", f"edition={edition}"]
-       for adapter in ("rosbags", "genpy") for edition in ("seed", "9.0.0")},
+       for adapter in ("rosbags", "genpy", "roscpp") for edition in ("seed", "9.0.0")},
     "capture-dune-seed": ["pcap", str(DATA / "dune-seed.pcapng")],
 }
 

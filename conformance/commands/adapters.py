@@ -49,18 +49,34 @@ def load_library_adapter(spec: str, suite, arguments: dict[str, str] | None = No
 
 def adapter_choice(args, suite) -> tuple[str, list[str] | None]:
     """The adapter's name and, for a subprocess adapter, its argv; usage errors for an ambiguous choice."""
+    chosen = [o for o, v in (("--adapter", args.adapter), ("--adapter-cmd", args.adapter_cmd),
+                             ("--adapter-socket", getattr(args, "adapter_socket", None))) if v is not None]
+    if len(chosen) > 1:
+        raise UsageError(f"give one of {', '.join(chosen)}, not several")
+    if getattr(args, "adapter_socket", None) is not None:
+        return args.adapter_socket, None
     if args.adapter_cmd is None:
         name = args.adapter or next(iter(suite.adapters))
-        return name, builtin_argv(name, suite)
-    if args.adapter is not None:
-        raise UsageError("give either --adapter or --adapter-cmd, not both")
+        return name, builtin_argv(name, suite, adapter_arguments(args))
     return args.adapter_cmd, split_command(args.adapter_cmd)
 
 
-def builtin_argv(name: str, suite) -> list[str] | None:
-    """The command line of a built-in subprocess adapter (a shim), or None for a library adapter."""
+def builtin_argv(name: str, suite, arguments: dict[str, str] | None = None) -> list[str] | None:
+    """The command line of a built-in subprocess adapter (a shim, or a program built on first use, which may take
+    ``--adapter-arg``s), or None for a library adapter."""
+    from ..native import BuildError
+
     builtin = suite.adapters.get(name)
-    return builtin.argv() if builtin is not None and builtin.argv is not None else None
+    if builtin is None or builtin.argv is None:
+        return None
+    try:
+        inspect.signature(builtin.argv).bind(**(arguments or {}))
+    except TypeError:
+        raise UsageError(f"adapter {name!r} takes no --adapter-arg {', '.join(arguments)}") from None
+    try:
+        return builtin.argv(**(arguments or {}))
+    except BuildError as exc:  # a program built on first use (dune-cpp, roscpp) could not be
+        raise UsageError(str(exc)) from None
 
 
 def split_command(cmd: str) -> list[str]:
@@ -94,11 +110,22 @@ def open_session(name: str, argv: list[str] | None, args, suite, *, isolate: boo
     from ..sessions.calls import CallTarget
     from ..sessions.library import LibrarySession
 
+    if getattr(args, "adapter_socket", None) is not None:
+        from ..sessions.stream_socket import SocketSession
+
+        if args.adapter_arg:
+            raise UsageError("--adapter-arg is for library adapters; a socket adapter takes its own arguments")
+        try:
+            return CallTarget(SocketSession(args.adapter_socket, encoding_param=suite.encoding_param,
+                                            timeout=args.timeout, hello_timeout=max(30.0, args.timeout)))
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
     if argv is None and isolate:
         load_library_adapter(name, suite, adapter_arguments(args))  # a one-line error now, not a dead worker later
         argv = worker_argv(name, suite, args)
-    elif argv is not None and args.adapter_arg:
-        raise UsageError("--adapter-arg is for library adapters; a subprocess adapter takes its own arguments")
+    elif argv is not None and args.adapter_arg and name not in suite.adapters:
+        raise UsageError("--adapter-arg is for library and built-in adapters; a subprocess adapter takes its own "
+                         "arguments")
     if argv is not None:
         from ..sessions.subprocess import SubprocessSession
 

@@ -89,7 +89,7 @@ def command(args) -> int:
     groups = [g for g in source.groups if not args.message or g in args.message]
     if args.target:
         return live_fuzz(args, suite, everything, source, groups, edition, targets)
-    chosen = [(name, builtin_argv(name, suite)) for name in args.adapter] + [
+    chosen = [(name, builtin_argv(name, suite, adapter_arguments(args))) for name in args.adapter] + [
         (cmd, split_command(cmd)) for cmd in args.adapter_cmd]
     if not chosen:
         chosen = [(next(iter(suite.adapters)), None)]

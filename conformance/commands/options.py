@@ -162,8 +162,11 @@ def add_adapter(parser, *, what: str = "an implementation") -> None:
     parser.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter speaking JSON lines "
                                                              "(adapters/README.md); split like a shell would, but never "
                                                              "run by one")
+    parser.add_argument("--adapter-socket", metavar="URL",
+                        help="an implementation serving the same JSON lines on a socket: tcp://HOST:PORT "
+                             "(IPv6 as tcp://[::1]:PORT) or unix:PATH")
     parser.add_argument("--timeout", type=positive_seconds, default=5.0,
-                        help="seconds per request for subprocess adapters (default 5)")
+                        help="seconds per request for subprocess and socket adapters (default 5)")
     parser.add_argument("--memory-limit", type=megabytes, default=DEFAULT_MEMORY_MB, metavar="MB",
                         help=f"data memory a subprocess adapter may use (default {DEFAULT_MEMORY_MB}; 0: no limit): one "
                              "that tries to allocate what a hostile length asks for fails instead of the machine")

@@ -88,8 +88,8 @@ def command(args) -> int:
         options = live.options(args, suite, everything)
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
-    if args.target and (args.adapter or args.adapter_cmd):
-        raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd, not both")
+    if args.target and (args.adapter or args.adapter_cmd or args.adapter_socket):
+        raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd/--adapter-socket, not both")
     name, argv = (args.target, None) if args.target else adapter_choice(args, suite)
     if not cases:
         raise UsageError("the selection matches no case")

@@ -47,7 +47,7 @@ class BuiltinAdapter:
 
     name: str
     library: str | None = None
-    argv: Callable[[], list[str]] | None = None
+    argv: Callable[..., list[str]] | None = None  # keyword arguments: the --adapter-arg NAME=VALUE it takes
     help: str = ""
 
 
@@ -103,7 +103,7 @@ class Suite(ABC):
         if key is None:
             return []
         tags = set(tags)
-        return [e["id"] for e in self.errata if e.get("implementation") == key and (
+        return [e["id"] for e in self.errata if key in erratum_keys(e.get("implementation")) and (
             any(fnmatch.fnmatchcase(case_id, g) for g in e.get("cases", ()))
             or ("tags" in e and set(e["tags"]) <= tags)
             or any(set(s) <= tags for s in e.get("tag_sets", ())))]
@@ -143,3 +143,10 @@ class Suite(ABC):
     def profile(self, name: str) -> dict:
         """The profile ``name`` of the suite's scenarios (``profiles/<name>.json``); ValueError if unknown."""
         raise ValueError(f"the suite {self.name!r} has no profiles")
+
+
+def erratum_keys(implementation) -> tuple[str, ...]:
+    """The hello keys an erratum applies to (its ``implementation``: one key or a list of them)."""
+    if implementation is None:
+        return ()
+    return (implementation,) if isinstance(implementation, str) else tuple(implementation)

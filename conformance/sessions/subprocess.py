@@ -161,11 +161,7 @@ class _Process:
 
     def send(self, request) -> None:
         """Write one request object, or a batch (a list of them), as one line."""
-        try:
-            line = orjson.dumps(request, option=orjson.OPT_APPEND_NEWLINE)
-        except orjson.JSONEncodeError:  # text orjson will not write (a lone surrogate an adapter answered): escaped
-            line = json.dumps(request, separators=(",", ":")).encode() + b"\n"
-        self._outbox.put(line)
+        self._outbox.put(request_line(request))
 
     def next_event(self, timeout: float):
         """The next event, or None if there was none within ``timeout`` seconds."""
@@ -218,16 +214,7 @@ class _Process:
                 pass
 
     def _read_stdout(self) -> None:
-        stdout, limit = self.popen.stdout, self._max_line
-        try:
-            while line := stdout.readline(limit + 1):
-                if len(line) > limit and not line.endswith(b"\n"):
-                    self.events.put(("oversize", line[:SNIPPET]))
-                    return
-                self.events.put(("line", line))
-            self.events.put(("eof", b""))
-        finally:
-            stdout.close()
+        read_lines(self.popen.stdout, self._max_line, self.events)
 
     def _wait(self) -> None:
         self.popen.wait()
@@ -240,6 +227,31 @@ class _Process:
                 tail.add(chunk)
         finally:
             stderr.close()
+
+
+def request_line(request) -> bytes:
+    """One request object, or a batch (a list of them), as one line of JSON."""
+    try:
+        return orjson.dumps(request, option=orjson.OPT_APPEND_NEWLINE)
+    except orjson.JSONEncodeError:  # text orjson will not write (a lone surrogate an adapter answered): escaped
+        return json.dumps(request, separators=(",", ":")).encode() + b"\n"
+
+
+def read_lines(stream, limit: int, events: queue.SimpleQueue, end: tuple = ("eof",)) -> None:
+    """Put each line of ``stream`` on ``events`` as ``("line", bytes)``, or ``("oversize", first bytes)`` for a
+    line over ``limit`` bytes (then stop reading); at the end, an event for each kind in ``end``."""
+    try:
+        while line := stream.readline(limit + 1):
+            if len(line) > limit and not line.endswith(b"\n"):
+                events.put(("oversize", line[:SNIPPET]))
+                return
+            events.put(("line", line))
+    except OSError:  # a connection reset: its end
+        pass
+    finally:
+        stream.close()
+    for kind in end:
+        events.put((kind, b""))
 
 
 @dataclass
@@ -348,11 +360,15 @@ class SubprocessSession:
 
     # ------------------------------------------------------------ start and greet
 
-    def _start(self) -> None:
+    def _open(self):
+        """A new channel to the program: a new run of it (a socket session opens a connection instead)."""
         try:
-            proc = _Process(self.argv, self.cwd, self.env, self.max_line, self._tail, self.memory_limit)
+            return _Process(self.argv, self.cwd, self.env, self.max_line, self._tail, self.memory_limit)
         except OSError as exc:
             raise AdapterStartError(f"cannot start adapter {self.argv}: {exc.strerror or exc}") from exc
+
+    def _start(self) -> None:
+        proc = self._open()
         try:
             self._info = self._greet(proc)
         except AdapterStartError:

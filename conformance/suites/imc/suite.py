@@ -96,6 +96,8 @@ class ImcSuite(DataSuite):
                                          help="imcpy through the subprocess protocol"),
             "pyimclsts-shim": BuiltinAdapter("pyimclsts-shim", argv=pyimclsts_shim_argv,
                                              help="pyimclsts through the subprocess protocol"),
+            "dune-cpp": BuiltinAdapter("dune-cpp", argv=dune_cpp_argv,
+                                       help="DUNE's IMC codec in C++, without the binding (subprocess; built on first use)"),
         }
 
     def schema(self, kind: str) -> Path:
@@ -159,6 +161,12 @@ def pyimclsts_shim_argv() -> list[str]:
 
     return shim_argv("pyimclsts_shim.py") + ["--imc-xml", str(fetch_imc_xml()), "--cache",
                                              str(cache_dir() / "pyimclsts-shim")]
+
+
+def dune_cpp_argv() -> list[str]:
+    from .dune.codec import argv
+
+    return argv()
 
 
 def load(folder: Path | None = None) -> ImcSuite:

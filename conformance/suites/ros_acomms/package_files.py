@@ -93,3 +93,17 @@ def read_package(folder: Path, package: str = "ros_acomms_msgs") -> dict[str, st
         except DefinitionError as exc:
             raise ValueError(str(exc)) from None
     return {name: text for name, text, _ in found}
+
+
+def source_files(edition: str | None, msgs: str | None, package: str = "ros_acomms_msgs") -> dict[str, str]:
+    """Relative path -> text of the msg/ and srv/ files a code generator (genpy, gencpp) reads: a team's package
+    folder ``msgs`` (checked line by line first, so a syntax error is named by file and line), else the suite's
+    edition (the seed's by default; a service half without the other half as a message of the same name)."""
+    if msgs is not None:
+        folder = Path(msgs)
+        read_package(folder, package)
+        return {p.relative_to(folder).as_posix(): p.read_text(encoding="utf-8")
+                for p in sorted([*folder.glob("msg/*.msg"), *folder.glob("srv/*.srv")])}
+    from .definitions import load_definitions
+
+    return package_texts(load_definitions().edition(edition or "seed"), package, lone_halves=True)[0]

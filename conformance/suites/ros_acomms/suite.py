@@ -102,6 +102,9 @@ class RosSuite(DataSuite):
                                       help="rosbags (library; --adapter-arg edition=E or msgs=DIR)"),
             "genpy": BuiltinAdapter("genpy", library=f"{ADAPTERS_PACKAGE}.genpy_adapter:GenpyAdapter",
                                     help="genpy from Debian (library; --adapter-arg edition=E or msgs=DIR)"),
+            "roscpp": BuiltinAdapter("roscpp", argv=roscpp_argv,
+                                     help="roscpp's serialization in C++ (subprocess, built on first use; --adapter-arg "
+                                          "edition=E or msgs=DIR)"),
             "reference-handler": BuiltinAdapter("reference-handler", library=f"{__package__}.handler:ReferenceHandler",
                                                 help="the suite's reference service handler (library; scenarios; "
                                                      "--adapter-arg broken=NAME breaks one rule)"),
@@ -166,3 +169,9 @@ def load(folder: Path | None = None) -> RosSuite:
     except DefinitionError as exc:
         from ...errors import CorpusError
         raise CorpusError(f"{own}: {exc}") from None
+
+
+def roscpp_argv(edition: str | None = None, msgs: str | None = None) -> list[str]:
+    from .roscpp import argv
+
+    return argv(edition, msgs)

@@ -52,10 +52,7 @@ def build(jobs: int | None = None, say=print) -> Path:
         say(f"DUNE is built: {binary()} (from the imcpy {IMCPY_VERSION} sdist, cached)")
         return binary()
     started = time.monotonic()
-    if not source().exists():
-        say(f"extracting DUNE's source from {sdist.name}")
-        with tarfile.open(sdist) as tar:
-            tar.extractall(home() / "src", filter="data")
+    extract(say)
     out = home() / "build"
     out.mkdir(parents=True, exist_ok=True)
     say("configuring (cmake)")
@@ -66,6 +63,15 @@ def build(jobs: int | None = None, say=print) -> Path:
     (out / "built-from").write_text(_digest(sdist))
     say(f"DUNE is built: {binary()} in {(time.monotonic() - started) / 60:.1f} min")
     return binary()
+
+
+def extract(say=print) -> Path:
+    """DUNE's source tree, extracted from the cached sdist once."""
+    if not source().exists():
+        say(f"extracting DUNE's source from {imcpy_sdist().name}")
+        with tarfile.open(imcpy_sdist()) as tar:
+            tar.extractall(home() / "src", filter="data")
+    return source()
 
 
 def _run(argv: list[str], cwd: Path, log: Path, say) -> None:

@@ -20,7 +20,7 @@ from ....fuzz import promote
 from ....fuzz.promote import promoted_cases
 from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
 from .. import codec
-from ..definitions import Edition, FieldType, Message, RosDefinitions, TypeDef, load_definitions
+from ..definitions import PRIMITIVES, Edition, FieldType, Message, RosDefinitions, TypeDef, load_definitions
 from ..fuzzing import RosFuzzSource
 from ..msgtext import full_text, md5, service_md5
 from ... import load_suite
@@ -178,6 +178,10 @@ def add_invalid(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Messa
         at_final = final_blob is not None and s.end == final_blob.start
         invalid(f"length-overrun/{owner}", patch_u32(frame, s.start, claim), at_final=at_final)
         invalid(f"length-overrun/{owner}/huge", patch_u32(frame, s.start, 0xFFFFFFFF), ["class:huge-length"], at_final)
+        if element > 1 and field_type_at(edition, msg, owner).element.base in PRIMITIVES:
+            # a length whose byte count (element size x length) is 2^32: 0 in a reader computing it in 32 bits
+            invalid(f"length-overrun/{owner}/wraps", patch_u32(frame, s.start, 2 ** 32 // element),
+                    ["class:wrapping-length"], at_final)
     for f in msg.fields:
         if f.type.array is not None and f.type.array >= 0:
             for name, size in (("short", f.type.array - 1), ("long", f.type.array + 1)):

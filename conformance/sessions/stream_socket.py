@@ -1,0 +1,126 @@
+"""The adapter contract over a socket: an implementation that runs elsewhere (an embedded target, another
+container, a vehicle's computer) serves the JSON lines of the subprocess session on TCP or a Unix socket, and the
+runner connects (``--adapter-socket tcp://HOST:PORT`` or ``unix:PATH``).
+
+Everything but the channel is the subprocess session's: pipelining, batches, bounded lines, strict JSON, replay
+one request at a time after a failure so that the right case is blamed. A connection the peer closes or resets is
+what a crash is for a program: the session reconnects and replays, and a request that loses the connection again
+while it is alone in flight is a CRASH; a request without an answer within the timeout is a TIMEOUT, and the
+connection is replaced. When no new connection can be made the remaining cases fail with that reason. The peer is
+untrusted: its address is resolved once, when the session is made; every line it sends is bounded and parsed as
+data; nothing it sends is executed or followed.
+"""
+
+from __future__ import annotations
+
+import queue
+import socket
+import threading
+import time
+from urllib.parse import urlsplit
+
+from ..core.session import AdapterStartError
+from .subprocess import SubprocessSession, read_lines, request_line
+
+
+def parse_address(url: str) -> tuple[int, object, str]:
+    """(family, address, how to name it) of ``tcp://HOST:PORT``, ``tcp://[IPv6]:PORT`` or ``unix:PATH``; the
+    host name, if not a literal address, is looked up here, once. ValueError for anything else."""
+    if url.startswith("unix:"):
+        path = url[len("unix://"):] if url.startswith("unix://") else url[len("unix:"):]
+        if not path or "\0" in path:
+            raise ValueError(f"--adapter-socket {url!r}: expected unix:PATH")
+        return socket.AF_UNIX, path, f"unix:{path}"
+    try:
+        parts = urlsplit(url)
+        port = parts.port
+    except ValueError:  # an unclosed [, a port out of range
+        parts, port = None, None
+    if port is None or parts.scheme != "tcp" or not parts.hostname or parts.path not in ("", "/"):
+        raise ValueError(f"--adapter-socket {url!r}: expected tcp://HOST:PORT (IPv6 as tcp://[::1]:PORT) or unix:PATH")
+    try:
+        found = socket.getaddrinfo(parts.hostname, port, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise ValueError(f"--adapter-socket {url!r}: cannot resolve {parts.hostname!r}: {exc}") from None
+    family, _, _, _, address = found[0]
+    return family, address, url
+
+
+class _Connection:
+    """One connection, with the events and operations the session expects of a program's run: ``("line",
+    bytes)``, ``("oversize", ...)``, and at the connection's end ``("exit", b"")`` then ``("eof", b"")``."""
+
+    def __init__(self, family: int, address, max_line: int, timeout: float):
+        sock = socket.socket(family, socket.SOCK_STREAM)
+        sock.settimeout(timeout)
+        try:
+            sock.connect(address)
+        except OSError:
+            sock.close()
+            raise
+        sock.settimeout(None)
+        self.sock = sock
+        self.events: queue.SimpleQueue = queue.SimpleQueue()
+        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self.stderr_start = 0
+        self.exited_at: float | None = None
+        self._ended = threading.Event()
+        threading.Thread(target=self._read, args=(sock.makefile("rb"), max_line), daemon=True).start()
+        threading.Thread(target=self._write, daemon=True).start()
+
+    def _read(self, stream, max_line: int) -> None:
+        read_lines(stream, max_line, self.events, end=())
+        self._ended.set()
+        self.events.put(("exit", b""))
+        self.events.put(("eof", b""))
+
+    def _write(self) -> None:
+        try:
+            while (line := self._outbox.get()) is not None:
+                self.sock.sendall(line)
+        except OSError:
+            pass  # the peer is gone; the reader reports it
+
+    def send(self, request) -> None:
+        self._outbox.put(request_line(request))
+
+    def next_event(self, timeout: float):
+        try:
+            return self.events.get(timeout=max(timeout, 0))
+        except queue.Empty:
+            return None
+
+    def exited(self) -> None:
+        if self.exited_at is None:
+            self.exited_at = time.monotonic()
+
+    def exit_status(self, wait: float = 0.5) -> str | None:
+        """"closed the connection" once the peer has, else None."""
+        return "closed the connection" if self._ended.wait(min(wait, 0.5)) else None
+
+    def kill_group(self) -> None:
+        """Nothing to kill: the program is the peer's."""
+
+    def stop(self, *, kill: bool = False, grace: float = 2.0) -> None:
+        self._outbox.put(None)
+        try:
+            self.sock.shutdown(socket.SHUT_RDWR)
+        except OSError:
+            pass
+        self.sock.close()
+
+
+class SocketSession(SubprocessSession):
+    """A session over a program serving the adapter contract on a socket (see the module docstring)."""
+
+    def __init__(self, url: str, *, name: str | None = None, **settings):
+        settings.pop("memory_limit", None)  # the peer's memory is the peer's
+        family, self.address, shown = parse_address(url)
+        super().__init__([], name=name or shown, memory_limit=0, **settings)
+        self.family, self.url = family, shown
+
+    def _open(self):
+        try:
+            return _Connection(self.family, self.address, self.max_line, self.hello_timeout)
+        except OSError as exc:
+            raise AdapterStartError(f"cannot connect to {self.url}: {exc.strerror or exc}") from exc
