@@ -9,7 +9,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test generate benchmark dune dune-conformance matrix mutants
+.PHONY: conformance test generate benchmark dune dune-conformance matrix mutants cpp-adapters
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -24,14 +24,15 @@ generate: $(VENV)/.installed
 MATRIX = reports/matrix
 matrix: $(VENV)/.installed
 	mkdir -p $(MATRIX)
-	for a in imcpy pyimclsts imcpy-shim pyimclsts-shim; do \
+	for a in imcpy pyimclsts imcpy-shim pyimclsts-shim dune-cpp; do \
 	  $(VENV)/bin/imc-conformance run --adapter $$a --no-progress --json $(MATRIX)/$$a.json > /dev/null; done; true
-	for a in rosbags genpy; do \
+	for a in rosbags genpy roscpp; do \
 	  $(VENV)/bin/imc-conformance run --suite ros_acomms --adapter $$a --no-progress --json $(MATRIX)/$$a.json > /dev/null; done; true
 	$(VENV)/bin/imc-conformance pcap tests/data/dune-seed.pcapng --json $(MATRIX)/dune-recording.json > /dev/null; true
 	$(VENV)/bin/imc-conformance matrix imcpy=$(MATRIX)/imcpy.json pyimclsts=$(MATRIX)/pyimclsts.json \
-	  imcpy-shim=$(MATRIX)/imcpy-shim.json pyimclsts-shim=$(MATRIX)/pyimclsts-shim.json \
+	  imcpy-shim=$(MATRIX)/imcpy-shim.json pyimclsts-shim=$(MATRIX)/pyimclsts-shim.json dune-cpp=$(MATRIX)/dune-cpp.json \
 	  "DUNE (recording)=$(MATRIX)/dune-recording.json" rosbags=$(MATRIX)/rosbags.json genpy=$(MATRIX)/genpy.json \
+	  roscpp=$(MATRIX)/roscpp.json \
 	  --markdown reports/matrix.md --html reports/matrix.html
 
 mutants: $(VENV)/.installed
@@ -40,6 +41,12 @@ mutants: $(VENV)/.installed
 
 benchmark: $(VENV)/.installed
 	$(VENV)/bin/python -m imc_conformance.benchmark
+
+# The compiled implementations (adapters/cpp): DUNE's IMC codec and roscpp's serialization, built into the cache
+# (about a minute on 2 cores the first time; the run builds them too when they are missing), then judged.
+cpp-adapters: $(VENV)/.installed
+	$(VENV)/bin/imc-conformance run --adapter dune-cpp --json reports/dune-cpp.json
+	$(VENV)/bin/imc-conformance run --suite ros_acomms --adapter roscpp --json reports/roscpp.json; test $$? -le 1
 
 # DUNE (LSTS's IMC node) as a live target: built once from the imcpy sdist into the cache (10-30 min on 2 cores),
 # then the scenario set against it inside a private network namespace (needs root for unshare --net), then live

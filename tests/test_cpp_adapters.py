@@ -6,6 +6,7 @@ over a socket (``--listen``) with the same verdicts.
 
 from __future__ import annotations
 
+import json
 import resource
 import subprocess
 from contextlib import contextmanager
@@ -103,6 +104,19 @@ def test_dune_cpp_keeps_a_signalling_nan_that_imcpy_quiets(dune_program):
         [(_, decoded)] = session.run([Job("imc", "t", Request("decode-le", "decode", frame=encoded.frame,
                                                                 encoding="le"))])
     assert decoded.message["fields"]["range"] == "nan:7f800001"
+
+
+def test_a_batch_whose_answers_exceed_the_line_limit_is_answered_one_a_line(dune_program):
+    """Twenty decoded 65,535-byte frames are 1.3 MB of answers: more than the suite reads in one line."""
+    big = next(f for c in IMC_CASES for f in c.data.get("frames", {}).values()
+               if len(f) == 2 * 65535 and c.data["expect"] in ("valid", {"imc-5.4.30": "valid", "imc-5.4.11": "valid"}))
+    batch = [{"id": n, "op": "decode", "suite": "imc", "frame": big} for n in range(20)]
+    done = subprocess.run([str(dune_program)], input=json.dumps(batch) + "\n", capture_output=True, text=True,
+                          timeout=60, check=True)
+    lines = done.stdout.splitlines()
+    assert len(lines) == 20 and max(map(len, lines)) < 1_000_000
+    assert sorted(json.loads(line)["id"] for line in lines) == list(range(20))
+    assert all(json.loads(line)["ok"] for line in lines)
 
 
 def test_dune_cpp_refuses_big_endian_encoding_as_unsupported(dune_program):

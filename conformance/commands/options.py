@@ -152,13 +152,14 @@ def add_reports(parser) -> None:
 
 
 def add_adapter(parser, *, what: str = "an implementation") -> None:
-    """How to reach an implementation: a built-in or library adapter, or a subprocess."""
+    """How to reach an implementation: a built-in or library adapter, a subprocess, or a socket."""
     parser.add_argument("--adapter", help=f"{what}: a built-in adapter of the suite (imc: imcpy, the default, pyimclsts, "
-                                          "imcpy-shim, pyimclsts-shim; ros_acomms: rosbags, the default, genpy), or a "
-                                          "library adapter as module:attribute or file.py:attribute (an object, a class "
-                                          "or a factory)")
+                                          "imcpy-shim, pyimclsts-shim, dune-cpp; ros_acomms: rosbags, the default, "
+                                          "genpy, roscpp), or a library adapter as module:attribute or "
+                                          "file.py:attribute (an object, a class or a factory)")
     parser.add_argument("--adapter-arg", action="append", default=[], metavar="NAME=VALUE",
-                        help="an argument for a library adapter's class or factory (repeatable)")
+                        help="an argument for a library adapter's class or factory, or a built-in adapter's, e.g. "
+                             "edition=9.0.0 (repeatable)")
     parser.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter speaking JSON lines "
                                                              "(adapters/README.md); split like a shell would, but never "
                                                              "run by one")
