@@ -33,7 +33,8 @@ def judged(report: Path, what: str, listed: int | None = None, explained: bool =
     """Check a saved result: its failures explained by errata (``explained``), its cases as many as listed."""
     doc = json.loads(report.read_text())
     cases = [c for m in doc["messages"] for c in m["cases"]]
-    unexplained = [c["id"] for c in cases if c["verdict"] == "FAIL" and not c.get("errata")]
+    unexplained = [c["id"] for c in cases
+                   if c["verdict"] in ("FAIL", "CRASH", "TIMEOUT", "ADAPTER_ERROR") and not c.get("errata")]
     if explained and unexplained:
         problems.append(f"{what}: {len(unexplained)} failures no erratum explains, e.g. {unexplained[:3]}")
     if listed is not None and len(cases) != listed:
@@ -44,7 +45,9 @@ def judged(report: Path, what: str, listed: int | None = None, explained: bool =
 with tempfile.TemporaryDirectory() as folder:
     here = Path(folder)
     print(run("--version").stdout.strip())
-    for suite, adapter in (("imc", "imcpy"), ("imc", "imcpy-shim"), ("ros_acomms", "rosbags")):
+    # the compiled adapters are built from the wheel's C++ sources, into the cache, on first use
+    for suite, adapter in (("imc", "imcpy"), ("imc", "imcpy-shim"), ("imc", "dune-cpp"), ("ros_acomms", "rosbags"),
+                           ("ros_acomms", "roscpp")):
         listed = sum("/scenario/" not in line and "/robustness/" not in line  # a library adapter runs the vectors
                      for line in run("list", "--suite", suite).stdout.splitlines())
         report = here / f"{adapter}.json"
