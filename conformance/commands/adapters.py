@@ -50,10 +50,10 @@ def load_library_adapter(spec: str, suite, arguments: dict[str, str] | None = No
 def adapter_choice(args, suite) -> tuple[str, list[str] | None]:
     """The adapter's name and, for a subprocess adapter, its argv; usage errors for an ambiguous choice."""
     chosen = [o for o, v in (("--adapter", args.adapter), ("--adapter-cmd", args.adapter_cmd),
-                             ("--adapter-socket", getattr(args, "adapter_socket", None))) if v is not None]
+                             ("--adapter-socket", args.adapter_socket)) if v is not None]
     if len(chosen) > 1:
         raise UsageError(f"give one of {', '.join(chosen)}, not several")
-    if getattr(args, "adapter_socket", None) is not None:
+    if args.adapter_socket is not None:
         return args.adapter_socket, None
     if args.adapter_cmd is None:
         name = args.adapter or next(iter(suite.adapters))
@@ -110,7 +110,7 @@ def open_session(name: str, argv: list[str] | None, args, suite, *, isolate: boo
     from ..sessions.calls import CallTarget
     from ..sessions.library import LibrarySession
 
-    if getattr(args, "adapter_socket", None) is not None:
+    if getattr(args, "adapter_socket", None) is not None:  # fuzz has no --adapter-socket
         from ..sessions.stream_socket import SocketSession
 
         if args.adapter_arg:

@@ -63,7 +63,8 @@ def command(args) -> int:
                           args.start, args.end, args.list_frames, args.time_scale)
     judge = CaptureJudge(suite.name, rules, edition, selection)
     adapter = None  # (name, session)
-    if args.adapter is not None or args.adapter_cmd is not None or args.adapter_socket is not None:  # started first: a mistaken adapter says so at once
+    # started first: a mistaken adapter says so at once
+    if args.adapter is not None or args.adapter_cmd is not None or args.adapter_socket is not None:
         from .adapters import started_session
         adapter = started_session(args, suite)
         judge.corpus_limit = args.adapter_frames

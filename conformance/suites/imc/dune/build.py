@@ -70,8 +70,23 @@ def extract(say=print) -> Path:
     if not source().exists():
         say(f"extracting DUNE's source from {imcpy_sdist().name}")
         with tarfile.open(imcpy_sdist()) as tar:
-            tar.extractall(home() / "src", filter="data")
+            _extract_files(tar, home() / "src")
     return source()
+
+
+def _extract_files(tar: tarfile.TarFile, into: Path) -> None:
+    """The archive's folders and regular files, each inside ``into`` (no links, devices or paths out of it):
+    what tarfile's "data" filter does, by hand, because Python 3.11 has that filter only from 3.11.4 on."""
+    into = into.resolve()
+    members = []
+    for member in tar.getmembers():
+        if not (member.isfile() or member.isdir()):
+            continue
+        if not (into / member.name).resolve().is_relative_to(into):
+            raise BuildError(f"{member.name!r} in the imcpy sdist would be written outside {into}")
+        member.mode = (member.mode | 0o600) & 0o755
+        members.append(member)
+    tar.extractall(into, members=members)
 
 
 def _run(argv: list[str], cwd: Path, log: Path, say) -> None:
