@@ -15,6 +15,7 @@ import pytest
 
 from harness import verdicts
 
+from imc_conformance.cli import main as cli_main
 from imc_conformance.core.verdicts import Verdict
 from imc_conformance.files import open_corpus
 from imc_conformance.sessions.stream_socket import SocketSession
@@ -144,6 +145,16 @@ def test_roscpp_fails_only_where_it_allocates_what_a_length_claims(roscpp_progra
     # a string's length is checked against the bytes left before it is copied: refused cleanly
     strings = [cid for cid in got if cid.endswith("_tags[0]/huge")]  # the first string of a string[]
     assert strings and {got[cid] for cid in strings} == {Verdict.PASS}
+
+
+def test_a_fuzzer_finding_of_roscpp_s_allocation_is_labelled_with_its_erratum(roscpp_programs, tmp_path, capsys):
+    """Generated frames with a length of 2^24 elements or more past the data carry huge-count: roscpp's CRASH on
+    them is erratum C1, an explained finding (the fuzz run exits 0)."""
+    report = tmp_path / "fuzz.json"
+    code = cli_main(["fuzz", "--suite", "ros_acomms", "--adapter", "roscpp", "--message", "SoundSpeedProfile",
+                     "--budget", "100", "--seed", "0", "--json", str(report)])
+    crashes = [c for m in json.loads(report.read_text())["messages"] for c in m["cases"] if c["verdict"] == "CRASH"]
+    assert code == 0 and crashes and all(c["errata"] == ["C1"] for c in crashes), capsys.readouterr().out[-2000:]
 
 
 def test_roscpp_describes_every_type_as_the_suite_does(roscpp_programs):

@@ -117,8 +117,8 @@ class RosFuzzSource:
             decoded = codec.decode(self.view, full, frame, spans)
         except FrameError as exc:
             return self.record(group, "invalid", self.clauses[exc.rule], [f"decode-{ENC}"],
-                               ["invalid", f"rule:{exc.rule}", *tags, *self.final_blob(group, frame, exc)],
-                               frame, rule=exc.rule)
+                               ["invalid", f"rule:{exc.rule}", *tags, *self.final_blob(group, frame, exc),
+                                *huge_count(frame, exc)], frame, rule=exc.rule)
         if _nsecs_over(decoded):
             return None
         used = max((s.end for s in spans), default=0)
@@ -227,3 +227,14 @@ def _nsecs_over(message: dict) -> bool:
     """Whether a decoded message holds a ``time`` or ``duration`` with a second or more in nsecs."""
     return any(isinstance(v, dict) and set(v) == {"secs", "nsecs"} and isinstance(v["nsecs"], int)
                and abs(v["nsecs"]) >= SECOND for v in _values(message))
+
+
+HUGE_COUNT = 1 << 24  # elements: a reader that allocates them before reading needs hundreds of MB to GBs
+
+
+def huge_count(frame: bytes, exc: FrameError) -> list[str]:
+    """``huge-count`` when the refused defect is a length of at least 2^24 elements past the data (what roscpp
+    allocates before it reads, erratum C1)."""
+    if exc.rule != "length-overrun" or exc.offset + 4 > len(frame):
+        return []
+    return ["huge-count"] if struct.unpack_from("<I", frame, exc.offset)[0] >= HUGE_COUNT else []
