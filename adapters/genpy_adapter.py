@@ -11,22 +11,18 @@ Messages move between the decoded form and genpy objects by genpy's own slots an
 
 from __future__ import annotations
 
-import hashlib
 import importlib
 import io
-import json
 import logging
-import os
 import struct
 import sys
 from pathlib import Path
 
 from imc_conformance.adapter_api import Rejected, Unsupported
-from imc_conformance.cache import cache_dir
 from imc_conformance.native import debian_packages, run
 from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits
 from imc_conformance.suites.ros_acomms.codec import int_form, int_value
-from imc_conformance.suites.ros_acomms.package_files import source_files
+from imc_conformance.suites.ros_acomms.package_files import generated_package, source_files
 
 SUITE = "ros_acomms"
 PACKAGE = "ros_acomms_msgs"
@@ -43,25 +39,17 @@ def debian_genpy() -> tuple[Path, dict[str, str]]:
 
 def generate(root: Path, versions: dict, files: dict[str, str]) -> Path:
     """The folder holding the generated ``ros_acomms_msgs`` package (generated once per text)."""
-    key = hashlib.sha256(json.dumps([versions, files], sort_keys=True).encode()).hexdigest()[:16]
-    out = cache_dir() / "genpy-classes" / key
-    if (out / "done").exists():
-        return out / "gen"
-    src, gen = out / "src", out / "gen" / PACKAGE
-    for name, text in files.items():
-        (src / name).parent.mkdir(parents=True, exist_ok=True)
-        (src / name).write_text(text, encoding="utf-8")
-    env = {**os.environ, "PYTHONPATH": str(root / DIST)}
-    includes = ["-I", f"{PACKAGE}:{src / 'msg'}", "-I", f"std_msgs:{root / 'usr/share/std_msgs/msg'}"]
-    for kind, script in (("msg", "genmsg_py.py"), ("srv", "gensrv_py.py")):
-        inputs = sorted((src / kind).glob(f"*.{kind}"))
-        if inputs:
-            tool = root / "usr/lib/genpy" / script
-            run([sys.executable, tool, "-p", PACKAGE, "-o", gen / kind, *includes, *inputs], f"genpy's {script}", env=env)
-            run([sys.executable, tool, "--initpy", "-o", gen / kind], f"genpy's {script} --initpy", env=env)
-    (gen / "__init__.py").write_text("", encoding="utf-8")
-    (out / "done").write_text("", encoding="utf-8")
-    return out / "gen"
+
+    def make(src: Path, gen: Path, env: dict, includes: list[str]) -> None:
+        for kind, script in (("msg", "genmsg_py.py"), ("srv", "gensrv_py.py")):
+            inputs = sorted((src / kind).glob(f"*.{kind}"))
+            if inputs:
+                tool, out = root / "usr/lib/genpy" / script, gen / PACKAGE / kind
+                run([sys.executable, tool, "-p", PACKAGE, "-o", out, *includes, *inputs], f"genpy's {script}", env=env)
+                run([sys.executable, tool, "--initpy", "-o", out], f"genpy's {script} --initpy", env=env)
+        (gen / PACKAGE / "__init__.py").write_text("", encoding="utf-8")
+
+    return generated_package("genpy", PACKAGE, root, versions, files, make)
 
 
 class GenpyAdapter:

@@ -5,10 +5,12 @@ the machine's ``g++``, each object once per content (sources, flags and compiler
 from __future__ import annotations
 
 import fcntl
+import functools
 import hashlib
 import json
 import os
 import shutil
+import tarfile
 import subprocess
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
@@ -94,6 +96,7 @@ def digest(*parts) -> str:
     return h.hexdigest()[:16]
 
 
+@functools.cache
 def compiler() -> str:
     """The C++ compiler (``$CXX``, else g++) and its version, for cache keys; BuildError if there is none."""
     cxx = os.environ.get("CXX", "g++")
@@ -128,3 +131,12 @@ def link(objects: list[Path], target: Path, flags: list[str] = ()) -> Path:
     run([compiler().split("\0")[0], *objects, "-o", partial, *flags], f"linking {target.name}")
     partial.replace(target)
     return target
+
+
+def built(what: str, build) -> Path:
+    """``build()``, the path of a program built on first use; any failure of the build (a step, a download, the
+    cache folder, an archive) as a BuildError naming ``what``, for a one-line error."""
+    try:
+        return build()
+    except (BuildError, RuntimeError, OSError, ValueError, tarfile.TarError) as exc:
+        raise BuildError(f"cannot build the {what}: {exc}") from None

@@ -56,11 +56,15 @@ def pins_nan(message: dict) -> dict | None:
     return {"nan_payload": True} if b'"nan:' in orjson.dumps(message) else None
 
 
-def case_id(suite: str, group: str, case: dict) -> str:
-    """``<suite>/<group>/fuzz/<hash>``: the hash of the case's inputs (frames, message, checks), so that the same
-    finding always gets the same id and promoting it twice adds it once."""
+def filed(suite: str, group: str, case: dict, tags, extra: dict) -> dict:
+    """A generated case completed: the suite's ``extra`` keys, its tags, and its id ``<suite>/<group>/fuzz/<hash>``,
+    the hash of its inputs (frames, message, checks), so that the same finding always gets the same id and
+    promoting it twice adds it once."""
+    case.update(extra)
+    case["tags"] = sorted(set(tags))
     key = orjson.dumps({k: case.get(k) for k in ("frames", "message", "checks")}, option=orjson.OPT_SORT_KEYS)
-    return f"{suite}/{group}/fuzz/{hashlib.sha256(key).hexdigest()[:12]}"
+    case["id"] = f"{suite}/{group}/fuzz/{hashlib.sha256(key).hexdigest()[:12]}"
+    return case
 
 
 def valid_frames(cases, edition: str) -> dict[str, list[tuple[str, bytes]]]:

@@ -13,14 +13,13 @@ data; nothing it sends is executed or followed.
 
 from __future__ import annotations
 
-import queue
 import socket
 import threading
 import time
 from urllib.parse import urlsplit
 
 from ..core.session import AdapterStartError
-from .subprocess import SubprocessSession, read_lines, request_line
+from .subprocess import Channel, SubprocessSession, read_lines
 
 
 def parse_address(url: str) -> tuple[int, object, str]:
@@ -46,7 +45,7 @@ def parse_address(url: str) -> tuple[int, object, str]:
     return family, address, url
 
 
-class _Connection:
+class _Connection(Channel):
     """One connection, with the events and operations the session expects of a program's run: ``("line",
     bytes)``, ``("oversize", ...)``, and at the connection's end ``("exit", b"")`` then ``("eof", b"")``."""
 
@@ -59,11 +58,9 @@ class _Connection:
             sock.close()
             raise
         sock.settimeout(None)
+        super().__init__()
         self.sock = sock
-        self.events: queue.SimpleQueue = queue.SimpleQueue()
-        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
         self.stderr_start = 0
-        self.exited_at: float | None = None
         self._ended = threading.Event()
         threading.Thread(target=self._read, args=(sock.makefile("rb"), max_line), daemon=True).start()
         threading.Thread(target=self._write, daemon=True).start()
@@ -80,15 +77,6 @@ class _Connection:
                 self.sock.sendall(line)
         except OSError:
             pass  # the peer is gone; the reader reports it
-
-    def send(self, request) -> None:
-        self._outbox.put(request_line(request))
-
-    def next_event(self, timeout: float):
-        try:
-            return self.events.get(timeout=max(timeout, 0))
-        except queue.Empty:
-            return None
 
     def exited(self) -> None:
         if self.exited_at is None:

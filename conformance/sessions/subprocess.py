@@ -119,7 +119,28 @@ class _StderrTail:
         return marker + self.text()
 
 
-class _Process:
+class Channel:
+    """What the session talks to: request lines go out through an outbox (a writer thread drains it), events come
+    in on a queue. A run of the program here; a connection in a socket session."""
+
+    def __init__(self):
+        self.events: queue.SimpleQueue = queue.SimpleQueue()
+        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self.exited_at: float | None = None  # when the end (exit, closed connection) was handled
+
+    def send(self, request) -> None:
+        """Write one request object, or a batch (a list of them), as one line."""
+        self._outbox.put(request_line(request))
+
+    def next_event(self, timeout: float):
+        """The next event, or None if there was none within ``timeout`` seconds."""
+        try:
+            return self.events.get(timeout=max(timeout, 0))
+        except queue.Empty:
+            return None
+
+
+class _Process(Channel):
     """One run of the program, in a process group of its own: pipes, a thread each for stdin, stdout and
     stderr, one that waits for its exit, and an event queue.
 
@@ -135,11 +156,9 @@ class _Process:
                 resource.prlimit(self.popen.pid, resource.RLIMIT_DATA, (memory_limit, memory_limit))
             except (ProcessLookupError, OSError):  # already gone (it is about to be seen so), or not Linux
                 pass
-        self.events: queue.SimpleQueue = queue.SimpleQueue()
-        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        super().__init__()
         self._max_line = max_line
         self.stderr_start = tail.total
-        self.exited_at: float | None = None  # when the exit event was handled
         self._stderr_reader = threading.Thread(target=self._read_stderr, args=(tail,), daemon=True)
         for thread in (threading.Thread(target=self._write, daemon=True),
                        threading.Thread(target=self._read_stdout, daemon=True), self._stderr_reader,
@@ -158,17 +177,6 @@ class _Process:
         if self.exited_at is None:
             self.exited_at = time.monotonic()
             self.kill_group()
-
-    def send(self, request) -> None:
-        """Write one request object, or a batch (a list of them), as one line."""
-        self._outbox.put(request_line(request))
-
-    def next_event(self, timeout: float):
-        """The next event, or None if there was none within ``timeout`` seconds."""
-        try:
-            return self.events.get(timeout=max(timeout, 0))
-        except queue.Empty:
-            return None
 
     def exit_status(self, wait: float = 0.5) -> str | None:
         """How the program ended ("exited with code 3"), or None if it still runs after ``wait`` seconds."""

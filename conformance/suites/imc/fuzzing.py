@@ -17,7 +17,7 @@ from functools import cached_property
 
 from hypothesis import strategies as st
 
-from ...fuzz.source import case_id, pins_nan, sized_lists
+from ...fuzz.source import filed, pins_nan, sized_lists
 from ...kinds.vector.errors import EncodeError, FrameError, NotJudged
 from ...kinds.vector.floats import FLOAT_CLASSES
 from . import codec
@@ -206,10 +206,7 @@ class ImcFuzzSource:
             case["message"] = message
         if compare:
             case["compare"] = compare
-        case.update(extra)
-        case["tags"] = sorted(set(tags))
-        case["id"] = case_id(self.suite, group, case)
-        return case
+        return filed(self.suite, group, case, tags, extra)
 
     def fields_of(self, message: dict):
         """(message definition, field, value, depth) of every field of a decoded message, inline messages and list

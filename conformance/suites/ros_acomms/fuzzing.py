@@ -15,12 +15,13 @@ import struct
 
 from hypothesis import strategies as st
 
-from ...fuzz.source import case_id, pins_nan, sized_lists
+from ...fuzz.source import filed, pins_nan, sized_lists
 from ...kinds.vector.errors import EncodeError, FrameError
 from ...kinds.vector.floats import FLOAT_CLASSES
 from . import codec
 from .codec import int_bounds, int_form
 from .definitions import PRIMITIVES, Edition, FieldType
+from .msgtext import md5
 
 ENC = "ros1"
 MAX_TEXT = 200
@@ -43,6 +44,7 @@ class RosFuzzSource:
         self.groups = tuple(self.types)
         self._seed_frames = corpus_frames or {}
         self._strategies: dict[str, object] = {}
+        self._md5 = {full: md5(view, view[full]) for full in self.types.values()}  # once, not per example
 
     # ------------------------------------------------------------ strategies
 
@@ -152,20 +154,15 @@ class RosFuzzSource:
 
     def record(self, group: str, expect: str, clause: str, checks: list[str], tags: list[str], frame: bytes,
                message: dict | None = None, **extra) -> dict:
-        from .msgtext import md5
-
         full = self.types[group]
-        case = {"id": "", "expect": {self.view.name: expect}, "clause": clause, "type": full, "md5": md5(self.view, self.view[full]),
-                "checks": checks, "frames": {ENC: frame.hex()}}
+        case = {"id": "", "expect": {self.view.name: expect}, "clause": clause, "type": full,
+                "md5": self._md5[full], "checks": checks, "frames": {ENC: frame.hex()}}
         if message is not None:
             case["message"] = message
             compare = pins_nan(message)
             if compare:
                 case["compare"] = compare
-        case.update(extra)
-        case["tags"] = sorted(set(tags))
-        case["id"] = case_id(self.suite, group, case)
-        return case
+        return filed(self.suite, group, case, tags, extra)
 
     def tags(self, message: dict) -> list[str]:
         """What a decoded message holds that errata are filed by: ``time-secs-from-2^31`` (a ``time`` whose secs do

@@ -107,3 +107,28 @@ def source_files(edition: str | None, msgs: str | None, package: str = "ros_acom
     from .definitions import load_definitions
 
     return package_texts(load_definitions().edition(edition or "seed"), package, lone_halves=True)[0]
+
+
+def generated_package(tool: str, package: str, root: Path, versions: dict, files: dict[str, str], make,
+                      *key) -> Path:
+    """The folder (``gen``) a ROS 1 code generator of Debian's (genpy, gencpp: unpacked in ``root``) made from the
+    package's text ``files``, once per text, package versions and ``key``, in ``<cache>/<tool>-classes/<hash>``,
+    one process at a time: ``make(src, gen, env, includes)`` runs the generator on the files written under ``src``,
+    with ``env`` finding Debian's genmsg and ``includes`` the package's and std_msgs' message folders."""
+    from ...cache import cache_dir
+    from ...native import digest, locked
+
+    out = cache_dir() / f"{tool}-classes" / digest(versions, files, *key)
+    src, gen = out / "src", out / "gen"
+    if (out / "done").exists():
+        return gen
+    with locked(out):
+        if not (out / "done").exists():
+            for name, text in files.items():
+                (src / name).parent.mkdir(parents=True, exist_ok=True)
+                (src / name).write_text(text, encoding="utf-8")
+            env = {**os.environ, "PYTHONPATH": str(root / "usr/lib/python3/dist-packages")}
+            includes = ["-I", f"{package}:{src / 'msg'}", "-I", f"std_msgs:{root / 'usr/share/std_msgs/msg'}"]
+            make(src, gen, env, includes)
+            (out / "done").write_text("", encoding="utf-8")
+    return gen

@@ -173,12 +173,13 @@ def add_invalid(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Messa
         if s.role != "length":
             continue
         owner = s.path.removesuffix(".length")
-        element = element_size(edition, msg, s)
+        ftype = field_type_at(edition, msg, owner)
+        element = 1 if ftype.array is None else codec.min_size(edition, ftype.element)  # the fewest bytes of one
         claim = (len(frame) - s.end) // element + 1
         at_final = final_blob is not None and s.end == final_blob.start
         invalid(f"length-overrun/{owner}", patch_u32(frame, s.start, claim), at_final=at_final)
         invalid(f"length-overrun/{owner}/huge", patch_u32(frame, s.start, 0xFFFFFFFF), ["class:huge-length"], at_final)
-        if element > 1 and field_type_at(edition, msg, owner).element.base in PRIMITIVES:
+        if element > 1 and ftype.element.base in PRIMITIVES:
             # a length whose byte count (element size x length) is 2^32: 0 in a reader computing it in 32 bits
             invalid(f"length-overrun/{owner}/wraps", patch_u32(frame, s.start, 2 ** 32 // element),
                     ["class:wrapping-length"], at_final)
@@ -204,12 +205,6 @@ def final_blob_span(spans, length: int):
     if last.end == length and last.role == "value" and last.type in ("string", "uint8[]"):
         return last
     return None
-
-
-def element_size(edition: Edition, msg: Message, length_span) -> int:
-    """The fewest bytes an element of the string or array whose length this is takes."""
-    ftype = field_type_at(edition, msg, length_span.path.removesuffix(".length"))
-    return 1 if ftype.array is None else codec.min_size(edition, ftype.element)
 
 
 def field_type_at(edition: Edition, msg: Message, path: str) -> FieldType:
