@@ -6,6 +6,7 @@ misses are caught within the CI budget."""
 from __future__ import annotations
 
 import json
+import sys
 import textwrap
 
 import pytest
@@ -192,6 +193,46 @@ def test_a_crash_is_a_finding_with_the_input_that_caused_it(tmp_path, capsys):
     assert case["verdict"] == "CRASH"
     crashed = [c for c in case["checks"] if c["verdict"] == "CRASH"]
     assert crashed and all(len(bytes.fromhex(c["expected"])) > 30 for c in crashed)
+
+
+def test_a_library_adapter_s_non_finite_floats_cross_the_worker_as_in_process(tmp_path):
+    """A library adapter may answer NaN and the infinities as Python floats (adapters/README.md): in its worker
+    process they become the decoded form's words, so the verdicts are those of the adapter run in-process."""
+    from harness import verdicts
+
+    from imc_conformance.sessions.subprocess import SubprocessSession
+
+    program = tmp_path / "floats.py"
+    program.write_text(textwrap.dedent("""
+        from imc_conformance.suites import load_suite
+        from imc_conformance.suites.imc.mutants import Reference
+
+        WORDS = {"nan": float("nan"), "inf": float("inf"), "-inf": float("-inf")}
+
+        class PythonFloats(Reference):
+            name = "python-floats"
+            def decode(self, suite, frame, **params):
+                message = super().decode(suite, frame, **params)
+                message["fields"] = {k: WORDS.get(v, v) if isinstance(v, str) else v
+                                     for k, v in message["fields"].items()}
+                return message
+
+        adapter = PythonFloats(load_suite("imc").defs)
+    """))
+    suite, cases = open_corpus("imc")
+    chosen = [c for c in cases if c.group in ("LblRange", "VSWR") and c.kind == "vector"]
+    worker = SubprocessSession([sys.executable, "-m", "imc_conformance.sessions.worker", "--suite", "imc",
+                                f"{program}:adapter"],
+                               name="worker", encoding_param="byte_order", hello_timeout=60)
+    try:
+        isolated = {cid: v for cid, (v, _) in verdicts(worker, chosen, EDITION).items()}
+    finally:
+        worker.close()
+    namespace = {}
+    exec(compile(program.read_text(), str(program), "exec"), namespace)
+    in_process = {cid: v for cid, (v, _) in verdicts(namespace["adapter"], chosen, EDITION).items()}
+    assert isolated == in_process
+    assert any("/inf" in cid or "/nan" in cid for cid in in_process)
 
 
 def test_documented_errata_label_findings_and_do_not_fail_the_run(capsys, tmp_path):

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
+import struct
 import sys
 
 from ..adapter_api import Rejected, Unsupported
@@ -45,8 +47,38 @@ def answer(adapter, param: str, request) -> str:
         reply = {"id": ident, "ok": False, "internal": True, "error": f"{type(exc).__name__}: {exc}"}
     try:
         return _ENCODE(reply)
+    except ValueError:  # a NaN or infinity, which a library adapter may return as a Python float
+        reply = non_finite_as_text(reply)
+    except TypeError:
+        pass
+    try:
+        return _ENCODE(reply)
     except (TypeError, ValueError) as exc:
         return _ENCODE({"id": ident, "ok": False, "internal": True, "error": f"unserialisable answer: {exc}"})
+
+
+def non_finite_as_text(value):
+    """``value`` with every non-finite float in the decoded form's words: "inf", "-inf", "nan" for the default quiet
+    NaN (the same at either width), "nan:<16 hex digits>" for any other (exact for a fp64 field; an fp32 field's
+    payload is not known from a double). Iterative: no recursion an answer could drive."""
+    out = [None]
+    stack = [(value, out, 0)]
+    while stack:
+        item, parent, key = stack.pop()
+        if isinstance(item, float) and not math.isfinite(item):
+            bits = struct.unpack("<Q", struct.pack("<d", item))[0]
+            item = ("inf" if item > 0 else "-inf") if math.isinf(item) else \
+                "nan" if bits == 0x7FF8000000000000 else f"nan:{bits:016x}"
+        elif isinstance(item, dict):
+            copy = dict(item)
+            stack.extend((v, copy, k) for k, v in item.items())
+            item = copy
+        elif isinstance(item, list):
+            copy = list(item)
+            stack.extend((v, copy, i) for i, v in enumerate(item))
+            item = copy
+        parent[key] = item
+    return out[0]
 
 
 def main(argv: list[str] | None = None) -> int:
