@@ -617,3 +617,18 @@ def test_a_request_echoed_back_from_its_addressee_is_no_new_request():
     got = exchange((0, STATION, request(7)), (0.5, VEHICLE, status("SENT")), (1, VEHICLE, request(7)), end=40)
     assert got[f"{EX}/answered"].verdict is Verdict.PASS  # DUNE's router sends a request back to its sender
     assert got[f"{EX}/answered"].checks[0].detail.startswith("1 exchange ")
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.binary(min_size=0, max_size=30), st.data())
+def test_the_one_call_ethernet_path_reads_a_datagram_as_the_general_path_does(payload, data):
+    from imc_conformance.capture.datagrams import Dissector
+    from imc_conformance.capture.records import Record
+
+    frame = bytearray(ethernet_udp("10.0.0.1", 6001, "10.0.0.30", 6002, payload, 7))
+    for _ in range(data.draw(st.integers(0, 3))):  # header bytes changed: version, lengths, flags, protocol...
+        frame[data.draw(st.integers(12, min(len(frame), 42) - 1))] = data.draw(st.integers(0, 255))
+    frame = bytes(frame[:data.draw(st.integers(0, len(frame)))])
+    record = Record(3, 1.5, 1, frame, len(frame))
+    fast, general = Dissector().datagram(record), Dissector().dissected(record)
+    assert fast == general

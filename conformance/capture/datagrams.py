@@ -23,6 +23,7 @@ BSD_INET6 = (10, 24, 28, 30)  # AF_INET6 on Linux, NetBSD/OpenBSD, FreeBSD, macO
 IPV6_EXTENSIONS = (0, 43, 60)  # hop-by-hop, routing, destination options (fragment, 44, is handled apart)
 UDP = 17
 HELD_LIMIT = 1024  # datagrams awaiting fragments at once; the oldest is given up beyond that
+ADDRESS_CACHE = 1024  # IPv4 addresses kept as text
 
 
 @dataclass(slots=True)
@@ -47,6 +48,17 @@ class Dissector:
         self.given_up = 0
 
     def datagram(self, record: Record) -> Datagram | str:
+        d = record.data
+        if record.linktype == ETHERNET and len(d) >= 42:  # the common case, read with one struct call
+            kind, version, total, flags, protocol, src, dst, sport, dport, length = _ETHERNET_IPV4_UDP(d)
+            if kind == 0x0800 and version == 0x45 and protocol == UDP and not flags & 0x3FFF \
+                    and total <= len(d) - 14 and 8 <= length <= total - 20:  # whole, unfragmented, no options
+                return Datagram(record.number, record.time, _address(src), sport, _address(dst), dport,
+                                d[42:34 + length], False, record.comment)
+        return self.dissected(record)
+
+    def dissected(self, record: Record) -> Datagram | str:
+        """``datagram`` by the general path, every link layer and IP header the module reads."""
         found = _network(record.linktype, record.data)
         if isinstance(found, str):
             return found
@@ -126,6 +138,19 @@ class Dissector:
             return None
         del self.held[key]
         return bytes(whole[:held["end"]])
+
+
+_ETHERNET_IPV4_UDP = struct.Struct("!12xHBxH2xHxB2x4s4sHHH").unpack_from  # ethertype, IPv4 header, UDP header
+_ADDRESSES: dict[bytes, str] = {}  # IPv4 addresses as text, by their bytes (a capture has few hosts)
+
+
+def _address(raw: bytes) -> str:
+    text = _ADDRESSES.get(raw)
+    if text is None:
+        if len(_ADDRESSES) >= ADDRESS_CACHE:
+            _ADDRESSES.clear()
+        text = _ADDRESSES[raw] = socket.inet_ntoa(raw)
+    return text
 
 
 def _network(linktype: int, d: bytes) -> tuple[int, bytes] | str:

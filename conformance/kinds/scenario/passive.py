@@ -137,7 +137,7 @@ class PassiveExchanges:
             key = tuple(hashable(w.fields.get(e["reply_field"])) for e in rule.echoes)
             mine = self.keyed.get((id(rule), key), ())
         else:  # replies correlate by addressing alone
-            mine = [o for o in self.open[id(rule)] if o.request.src == w.dst or w.dst == self.anyone]
+            mine = (o for o in self.open[id(rule)] if o.request.src == w.dst or w.dst == self.anyone)
         o = self._answered_by(mine, w)
         if o is None:
             if rule.echoes:
@@ -162,15 +162,15 @@ class PassiveExchanges:
     def _state(self, o: _Open, w: Watched) -> list[Finding]:
         states = o.states
         value = w.fields.get(states.field)
-        named = f"{w.message} {states.field}={self._name(w.message, states.field, value)}"
         out = []
         if o.terminal is not None:
             if o.open_end is None:
                 return [self._finding(o, "after-terminal", LEVELS[states.level], states.clause,
-                                      f"{named} after the terminal state (frame {o.terminal.number})", w)]
+                                      f"{self._said(w, states.field)} after the terminal state "
+                                      f"(frame {o.terminal.number})", w)]
             out.append(self._finding(o, f"reading/{o.open_end}", Verdict.IMPL_DEFINED, states.clause,
-                                     f"the open state of frame {o.terminal.number} was followed by {named}: read as a "
-                                     f"delay (open reading {o.open_end})", w))
+                                     f"the open state of frame {o.terminal.number} was followed by "
+                                     f"{self._said(w, states.field)}: read as a delay (open reading {o.open_end})", w))
             o.terminal = o.open_end = None
         kind = states.kind(value)
         if kind == "terminal" or kind == "open" or (kind == "unknown" and states.unknown is not None):
@@ -194,9 +194,11 @@ class PassiveExchanges:
         """The request a reply answers among those it matches: its addressee's before another system's, and the
         oldest not yet answered before the latest answered (whose statuses go on)."""
         open_other = latest_mine = latest_other = None
+        anyone, sender = self.anyone, w.src
         for o in mine:  # oldest first
-            if not self._from_node(o, w):
-                continue
+            node = o.request.dst
+            if (sender == o.request.src) if node is None or node == anyone else (sender != node):
+                continue  # not from the system the request was for (see _from_node)
             if o.request.src == w.dst:
                 if not o.answered:
                     return o
@@ -280,6 +282,10 @@ class PassiveExchanges:
         """Who owed whom the reply: ``from system 30 to 19696``."""
         node = "any system" if o.request.dst in (None, self.anyone) else f"system {o.request.dst}"
         return f"from {node} to {o.request.src}"
+
+    def _said(self, w: Watched, path: str) -> str:
+        """What a frame said in one field: ``AcousticStatus status=SENT`` (built only for a finding's detail)."""
+        return f"{w.message} {path}={self._name(w.message, path, w.fields.get(path))}"
 
     def _name(self, message: str, path: str, value) -> str:
         named = self.wire.present(Parsed(None, message, {"fields": {path: value}})).get("fields", {}).get(path, value)

@@ -42,16 +42,28 @@ FLOAT_CLASSES = {
 }
 NON_FINITE = ("nan", "inf", "negative-inf", "nan-payload", "negative-nan")
 PAYLOAD_NANS = {"class:nan-payload", "class:negative-nan"}  # cases about a NaN's exact bits
+SHORTEST_CACHE = 1 << 16  # fp32 values whose shortest decimal is remembered (a capture repeats its values)
+_SHORTEST32: dict[float, float] = {}
+_F32 = struct.Struct("<f")
 
 
 def shortest_float(x: float, width: int) -> float:
     """The float whose repr is the shortest decimal that round-trips ``x`` at ``width`` bytes."""
     if width == 8 or not math.isfinite(x) or x == 0:
         return x
+    found = _SHORTEST32.get(x)
+    if found is None:
+        if len(_SHORTEST32) >= SHORTEST_CACHE:
+            _SHORTEST32.clear()
+        found = _SHORTEST32[x] = _shortest32(x)
+    return found
+
+
+def _shortest32(x: float) -> float:
     for digits in range(1, 10):
         candidate = float(f"{x:.{digits}g}")
         try:
-            if struct.unpack("<f", struct.pack("<f", candidate))[0] == x:
+            if _F32.unpack(_F32.pack(candidate))[0] == x:
                 return candidate
         except OverflowError:  # the rounded decimal lies beyond FLT_MAX
             continue

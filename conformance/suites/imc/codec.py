@@ -16,6 +16,7 @@ from ...kinds.vector.errors import EncodeError, FrameError, NotJudged
 from ...limits import NESTING_LIMIT
 from .crc16 import crc16
 from .definitions import SCALAR_FORMATS, Definitions, FieldDef, MessageDef
+from .unpackers import Irregular
 from ...kinds.vector.floats import float_from_bits, float_to_bits
 from .values import raw_bytes, text_bytes, text_value
 
@@ -140,8 +141,14 @@ def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None) -> 
     if spans is not None:
         spans += [Span(start, start + size_, f"header.{name}", type_, "header") for start, size_, name, type_ in HEADER_LAYOUT]
         spans.append(Span(end, end + 2, "footer.crc16", "uint16_t", "footer"))
-    reader = _Reader(defs, frame, e, end, spans)
-    fields = reader.fields(mdef, HEADER_SIZE, mdef.abbrev)
+    fields = None
+    if spans is None:
+        try:
+            fields = defs.unpackers.fields(mdef, frame, e, HEADER_SIZE, end)[0]
+        except Irregular:  # the reader names what is wrong
+            pass
+    if fields is None:
+        fields = _Reader(defs, frame, e, end, spans).fields(mdef, HEADER_SIZE, mdef.abbrev)
     header = {"timestamp": float_from_bits(ts_bits, 8), "src": src, "src_ent": src_ent, "dst": dst, "dst_ent": dst_ent}
     return {"abbrev": mdef.abbrev, "header": header, "fields": fields}
 
