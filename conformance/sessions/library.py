@@ -26,6 +26,10 @@ def _call(fn, *args, acknowledge: bool = False, **kwargs) -> Answer:
         return Answer("unsupported", reason=str(exc))
     except Exception as exc:  # an adapter bug must never pass a case
         return Answer("adapter-error", reason=f"{type(exc).__name__}: {exc}")
+    if result.__class__ is dict:  # positional: the common answers are built at every call
+        return Answer("ok", None, result)
+    if result.__class__ is bytes:
+        return Answer("ok", result)
     if acknowledge and result is None:
         return Answer("ok", message={})
     if isinstance(result, dict):
