@@ -112,6 +112,9 @@ class Suite(ABC):
     def generate(self, check: bool) -> int:
         """Rebuild the suite's generated files (or, with ``check``, only report drift: 1 if any); the exit code."""
 
+    # optional: generate_from(source: Path, out: Path) -> int, a suite folder built from a protocol description
+    # (IMC: an IMC.xml), ValueError for one it cannot read
+
     behaviour: dict | None = None  # what the suite's live case kinds share (exchanges, parameters, effects, services)
 
     def open_target(self, target: str, **settings):

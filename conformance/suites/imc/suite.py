@@ -63,7 +63,8 @@ class ImcSuite(DataSuite):
     def __init__(self, folder: Path, defs: Definitions):
         super().__init__(folder)
         self.defs = defs
-        self.editions = ("imc-5.4.30", "imc-5.4.11")  # what imcpy and deployed DUNE speak first; the seeds second
+        # the newest first: what imcpy and deployed DUNE speak (5.4.30) before the seeds' (5.4.11)
+        self.editions = tuple(sorted(defs.editions, key=lambda e: tuple(map(int, e[4:].split("."))), reverse=True))
 
     @cached_property
     def groups(self) -> tuple[Group, ...]:
@@ -122,6 +123,11 @@ class ImcSuite(DataSuite):
     def generate(self, check: bool) -> int:
         from .corpus.build import main
         return main(["--check"] if check else [])
+
+    def generate_from(self, source: Path, out: Path) -> int:
+        """A suite folder for the IMC.xml ``source``, written into ``out``; ValueError for an XML it cannot read."""
+        from .corpus.build import folder_from_xml
+        return folder_from_xml(source, out)
 
     def fuzz_source(self, edition: str, cases=()):
         from ...fuzz.source import valid_frames

@@ -60,7 +60,8 @@ def field_cases(mc: MessageCases, f: FieldDef):
     if f.enum_kind == "enum":
         known = {v.value for v in f.enum_values}
         lo, hi = f.int_bounds
-        for value in sorted({next(x for x in range(lo, hi + 1) if x not in known), hi} - known):
+        first_free = next((x for x in range(lo, hi + 1) if x not in known), hi)  # a full table has none
+        for value in sorted({first_free, hi} - known):
             yield (f"enum-out-of-table/{f.abbrev}/{value}", value, RECEIVERS, ["enum", "out-of-table"],
                    {"comment": f"{value} is in no edition's table; DUNE and imcpy carry it unchanged."})
     elif f.enum_kind == "bitfield":
@@ -68,7 +69,7 @@ def field_cases(mc: MessageCases, f: FieldDef):
         for v in f.enum_values:
             defined |= v.value
         undefined = [1 << b for b in range(8 * f.size) if not defined & (1 << b)]
-        for bit in (undefined[0], undefined[-1]):
+        for bit in sorted({undefined[0], undefined[-1]}) if undefined else ():  # a table of every bit has none
             yield (f"bitfield-undefined/{f.abbrev}/0x{bit:x}", bit, RECEIVERS, ["bitfield", "undefined-bit"],
                    {"comment": "A bit the table does not define; DUNE and imcpy carry it unchanged."})
     elif f.is_float and (f.minimum is not None or f.maximum is not None):
@@ -85,7 +86,7 @@ def field_cases(mc: MessageCases, f: FieldDef):
         for name, raw in (("utf8", "ol\u00e1 \u00e9\u00e8".encode()), ("invalid-utf8", b"\xff\xfe\xc3"), ("latin1", b"caf\xe9")):
             yield (f"text/{f.abbrev}/{name}", {"hex": raw.hex()}, "imc-wire#field-types", ["text", "non-ascii", f"class:{name}"],
                    {"comment": "Plaintext is specified as ASCII; DUNE copies the raw bytes, so do receivers that accept."})
-    elif f.type in ("message", "message-list") and f.message_types:
+    elif f.type in ("message", "message-list") and f.message_types and samples.wrong_type(defs, f):
         other = samples.wrong_type(defs, f)
         value = samples.filled_inline(defs, other, 0)
         yield (f"wrong-inline-type/{f.abbrev}/{other.abbrev}", value if f.type == "message" else [value],
@@ -130,10 +131,10 @@ def next_float(f: FieldDef, x: float, direction: int) -> float:
     """The next representable value of the field's width after ``x`` in ``direction``."""
     fmt, ifmt = ("<f", "<i") if f.size == 4 else ("<d", "<q")
     x = struct.unpack(fmt, struct.pack(fmt, x))[0]
+    if x == 0:  # either side of zero: the smallest subnormal, of the direction's sign
+        return direction * struct.unpack(fmt, struct.pack(ifmt, 1))[0]
     bits = struct.unpack(ifmt, struct.pack(fmt, x))[0]
     bits += direction if x >= 0 else -direction
-    if x == 0:
-        raise ValueError("next_float from zero is not needed here")
     return struct.unpack(fmt, struct.pack(ifmt, bits))[0]
 
 

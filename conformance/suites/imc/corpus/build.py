@@ -10,11 +10,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
 from ....fuzz import promote
 from ....fuzz.promote import promoted_cases
-from ..definitions import Definitions, lint_definitions, load_definitions
+from ....inputs import read_bytes
+from ..definitions import Definitions, lint_definitions, load_definitions, parse_definitions
+from ..from_xml import XML_LIMIT, definitions_from_xml
 from ..fuzzing import ImcFuzzSource
 from ... import load_suite
 from ...data_suite import write_generated
@@ -39,18 +42,30 @@ def load_examples() -> dict[str, list[dict]]:
 def build_corpus(defs: Definitions) -> dict[str, str]:
     """File name (relative to vectors/imc) -> exact text, for every generated file."""
     examples = load_examples()
-    files: dict[str, str] = {}
-    per_message = {}
     promoted = promoted_cases(promote.read(imc_data("promoted.json"), "imc"), {
         e: ImcFuzzSource(defs, e, {r["id"]: r["clause"] for r in load_suite("imc").rules}) for e in defs.editions})
+    files = message_files(defs, examples, promoted)
+    statements = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))["statements"]
+    register = json.loads(imc_data("ambiguities.json").read_text(encoding="utf-8"))["ambiguities"]
+    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()), register)
+    return files
+
+
+def message_files(defs: Definitions, examples: dict[str, list[dict]] | None = None,
+                  promoted: dict[str, list[dict]] | None = None, schema: str | None = "../../schema") -> dict[str, str]:
+    """The case file of every message the definitions cover and the coverage table (``examples``: realistic
+    messages, ``promoted``: kept fuzz findings, by message; ``schema``: the schema folder relative to cases/, for
+    editors, None where there is none)."""
+    files: dict[str, str] = {}
+    per_message = {}
     for mdef in defs.suite_messages:
         mc = MessageCases(defs, mdef)
-        add_valid(mc, examples.get(mdef.abbrev, []))
+        add_valid(mc, (examples or {}).get(mdef.abbrev, []))
         add_acceptable(mc)
         add_invalid(mc)
-        mc.extend(promoted.get(mdef.abbrev, []))
+        mc.extend((promoted or {}).get(mdef.abbrev, []))
         doc = {
-            "$schema": "../../schema/vectors.schema.json",
+            **({"$schema": f"{schema}/vectors.schema.json"} if schema else {}),
             "format": FORMAT_VERSION,
             "suite": "imc",
             "message": {"abbrev": mdef.abbrev, "id": mdef.id, "name": mdef.name, "clause": mdef.clause,
@@ -61,10 +76,32 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
         per_message[mdef.abbrev] = mc.cases
         files[f"cases/{mdef.id:03d}-{mdef.abbrev}.json"] = json.dumps(doc, indent=1, ensure_ascii=True) + "\n"
     files["coverage.md"] = coverage_markdown(defs, per_message)
-    statements = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))["statements"]
-    register = json.loads(imc_data("ambiguities.json").read_text(encoding="utf-8"))["ambiguities"]
-    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()), register)
     return files
+
+
+def folder_from_xml(source: Path, out: Path) -> int:
+    """Write a suite folder for the IMC.xml at ``source`` into ``out``: its definitions.json, a case file for every
+    message and the coverage table (``run --vectors out`` runs it); ValueError for an XML the suite cannot read."""
+    packaged = load_definitions().raw  # its frame and types: the wire facts an IMC.xml leaves out
+    doc = definitions_from_xml(read_bytes(source, XML_LIMIT), packaged["frame"], packaged["types"])
+    defs = parse_definitions(doc)
+    doc.pop("$schema")
+    files = {"definitions.json": json.dumps(doc, indent=1, ensure_ascii=True) + "\n"} | message_files(defs, schema=None)
+    if out.resolve().is_relative_to(imc_data().resolve()):
+        raise ValueError(f"{out}: inside the suite's own data folder (generate without --from rebuilds that)")
+    try:
+        (out / "cases").mkdir(parents=True, exist_ok=True)
+        stale = [p for p in (out / "cases").glob("*.json") if f"cases/{p.name}" not in files]
+        for path in stale:
+            path.unlink()
+        for name, text in files.items():
+            (out / name).write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise ValueError(f"{out}: cannot write: {exc.strerror or exc}") from None
+    cases = sum(len(json.loads(t)["cases"]) for n, t in files.items() if n.startswith("cases/"))
+    print(f"{cases} cases for {len(defs.messages)} messages of IMC {next(iter(doc['editions']))[4:]} in {out} "
+          f"({len(stale)} stale case files removed); run them with: imc-conformance run --vectors {out}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

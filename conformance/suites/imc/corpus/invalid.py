@@ -164,6 +164,8 @@ def add_prefix_overruns(mc: MessageCases, invalid, base: dict, order: str, spans
 
             list_path = s.path[:-len(".count")]
             after = max((x.end for x in spans if x.path.startswith(list_path + "[")), default=s.end)
+            if after < end:  # fields follow the list: the element claimed too many is read from them (their
+                continue  # bytes, not the CRC, make its id): that is another case, not generated
             guarded = perturbed(mc, base, order, lambda f, at=after: outside_id_space(f, order, at), build)
             invalid(f"list-count-overrun/{list_path}", "list-count-overrun", guarded, erratum="I1",
                     comment="The count claims one element more than the payload holds; DUNE would read its id from the CRC bytes, kept outside IMC's id space.")

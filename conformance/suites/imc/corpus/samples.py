@@ -99,10 +99,10 @@ def nested_inline(defs: Definitions, f: FieldDef) -> dict | None:
     return filled_inline(defs, outer, depth=2)
 
 
-def wrong_type(defs: Definitions, f: FieldDef) -> MessageDef:
-    """A defined message that is not among the field's declared types."""
-    return next(m for m in defs.suite_messages
-                if m.abbrev not in f.message_types and m.fields and all(x.is_scalar for x in m.fields))
+def wrong_type(defs: Definitions, f: FieldDef) -> MessageDef | None:
+    """A defined message of scalar fields that is not among the field's declared types (None: there is none)."""
+    return next((m for m in defs.suite_messages
+                 if m.abbrev not in f.message_types and m.fields and all(x.is_scalar for x in m.fields)), None)
 
 
 def with_field(base: dict, name: str, value) -> dict:
