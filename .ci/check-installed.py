@@ -46,11 +46,11 @@ with tempfile.TemporaryDirectory() as folder:
     here = Path(folder)
     print(run("--version").stdout.strip())
     # the compiled adapters are built from the wheel's C++ sources, into the cache, on first use
-    for suite, adapter in (("imc", "imcpy"), ("imc", "imcpy-shim"), ("imc", "dune-cpp"), ("ros_acomms", "rosbags"),
-                           ("ros_acomms", "roscpp")):
+    for suite, adapter in (("imc", "imcpy"), ("imc", "imcpy-shim"), ("imc", "dune-cpp"), ("imc-full", "imcpy"),
+                           ("ros_acomms", "rosbags"), ("ros_acomms", "roscpp")):
         listed = sum("/scenario/" not in line and "/robustness/" not in line  # a library adapter runs the vectors
                      for line in run("list", "--suite", suite).stdout.splitlines())
-        report = here / f"{adapter}.json"
+        report = here / f"{adapter}{'-full' if suite == 'imc-full' else ''}.json"
         run("run", "--suite", suite, "--adapter", adapter, "--no-progress", "--json", str(report), ok=(0, 1))
         judged(report, f"{suite} with {adapter}", listed)
     node = subprocess.Popen([str(BIN / "imc-conformance"), "serve", "--port", "0"], stderr=subprocess.PIPE, text=True)

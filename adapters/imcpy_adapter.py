@@ -14,7 +14,9 @@ How imcpy's refusals become ``Rejected``:
   message-list refusing an element (``TypeError``; this includes ``null``, which no imcpy list
   accepts): rule ``None``, imcpy's text in the reason.
 * A field the definition does not have: ``unknown-field``; a message neither we nor imcpy know:
-  ``unknown-message``. A message imcpy knows but we have no definition for is ``Unsupported`` on
+  ``unknown-message``. A message imcpy knows but the suite's definitions lack (or define with fields imcpy
+  does not have) goes through its definition in the IMC.xml imcpy was built from (fetched once, on first need);
+  one not even there is ``Unsupported`` on
   encode, and decodes to ``{"abbrev": <imcpy's name>, "fields": {}}`` (the header is kept at the top).
 * Fields missing from the input keep imcpy's defaults: imcpy has no notion of a missing field.
 * ``RuntimeError`` from DUNE's ``serialize``/``deserialize``: ``DUNE_ERRORS`` maps the start of its
@@ -78,8 +80,9 @@ class _Converter:
         self.put, attrs, self.names, self.getters = {}, [], [], []
         self.plain = {}  # field -> (imcpy attribute, conversion or None): the fast way in, used while nothing fails
         for f in mdef.fields:
-            attr = f.abbrev if hasattr(proto, f.abbrev) else f.abbrev.lower()
-            if not hasattr(proto, attr):
+            # looked up on the class: reading an attribute may fail (erratum I6)
+            attr = f.abbrev if hasattr(self.cls, f.abbrev) else f.abbrev.lower()
+            if not hasattr(self.cls, attr):
                 raise AttributeError(f"imcpy's {mdef.abbrev} has no attribute {f.abbrev!r} nor {attr!r}")
             where = f"{mdef.abbrev}.{f.abbrev}"
             self.put[f.abbrev] = adapter._putter(f, attr, where)
@@ -87,6 +90,7 @@ class _Converter:
             attrs.append(attr)
             self.names.append(f.abbrev)
             self.getters.append(adapter._getter(f))
+        self.attrs = attrs
         # one C-level call fetches every attribute (attrgetter of one name returns the bare value)
         self.fetch = attrgetter(*attrs) if len(attrs) > 1 else (lambda m, a=attrs: tuple(getattr(m, x) for x in a))
         # the fields whose values need converting (the others are taken as imcpy gives them)
@@ -110,7 +114,12 @@ class _Converter:
             put(msg, value)
 
     def fields(self, msg) -> dict:
-        values = self.fetch(msg)
+        try:
+            values = self.fetch(msg)
+        except TypeError as exc:  # a getter whose C++ type the binding cannot convert (erratum I6)
+            unreadable = next((n for n, a in zip(self.names, self.attrs) if not _readable(msg, a)), "?")
+            raise Unsupported(f"imcpy's binding cannot return {self.abbrev}.{unreadable}: "
+                              f"{_first_line(exc).split(' The signature')[0]}") from exc
         out = dict(zip(self.names, values))
         for i, name, get in self.converted:
             out[name] = get(values[i])
@@ -132,8 +141,35 @@ class ImcpyAdapter:
         self._header_getters = [self._getter(h) for h in header]
         self._header_fetch = attrgetter(*self._header_names)
         self._header_converted = [(i, h.abbrev, get) for i, (h, get) in enumerate(zip(header, self._header_getters)) if get]
-        self._by_abbrev = {m.abbrev: _Converter(self, m) for m in defs.messages}
-        self._by_class = {c.cls: c for c in self._by_abbrev.values()}
+        self._defs, self._whole = defs, None
+        self._by_abbrev: dict[str, _Converter] = {}  # built on first use of each message
+        self._by_class: dict[type, _Converter] = {}
+
+    def _converter_of(self, abbrev: str) -> _Converter | None:
+        """The converter of a message imcpy knows, built the first time from the suite's definition, else (the
+        suite has none, or one whose fields imcpy lacks) from that of the IMC.xml imcpy was built from; None for
+        a message imcpy does not know."""
+        conv = self._by_abbrev.get(abbrev)
+        if conv is not None:
+            return conv
+        try:
+            imcpy.Factory.produce(abbrev)
+        except (RuntimeError, TypeError):
+            return None
+        try:
+            conv = _Converter(self, self._defs.by_abbrev[abbrev])
+        except (KeyError, AttributeError):
+            if self._whole is None:
+                from imc_conformance.suites.imc.whole import imc_xml_definitions
+
+                self._whole = imc_xml_definitions()
+            mdef = self._whole.by_abbrev.get(abbrev)
+            if mdef is None:
+                return None
+            conv = _Converter(self, mdef)
+        self._by_abbrev[abbrev] = conv
+        self._by_class[conv.cls] = conv
+        return conv
 
     def hello(self) -> dict:
         return {"implementation": f"imcpy {version('imcpy')} (DUNE C++ codec, IMC {imcpy.constants.VERSION})",
@@ -178,14 +214,14 @@ class ImcpyAdapter:
         if not isinstance(message, dict):
             raise Rejected("a message must be an object", rule="value-type")
         abbrev = message.get("abbrev")
-        conv = self._by_abbrev.get(abbrev) if isinstance(abbrev, str) else None
+        conv = self._converter_of(abbrev) if isinstance(abbrev, str) else None
         if conv is None:
             try:
                 imcpy.Factory.produce(abbrev)
             except (RuntimeError, TypeError) as exc:
                 raise Rejected(f"imcpy does not know message {abbrev!r}: {_first_line(exc)}",
                                rule="unknown-message") from exc
-            raise Unsupported(f"imcpy knows {abbrev} but the definitions do not")
+            raise Unsupported(f"imcpy knows {abbrev} but neither the definitions nor its IMC.xml do")
         msg = conv.cls()
         conv.fill(msg, message.get("fields", {}))
         return msg
@@ -246,7 +282,7 @@ class ImcpyAdapter:
     # ------------------------------------------------------------ imcpy -> decoded form
 
     def _message_out(self, msg) -> dict:
-        conv = self._by_class.get(type(msg))
+        conv = self._by_class.get(type(msg)) or self._converter_of(msg.msg_name)
         if conv is None:
             return {"abbrev": msg.msg_name, "fields": {}}
         return {"abbrev": conv.abbrev, "fields": conv.fields(msg)}
@@ -269,6 +305,14 @@ class ImcpyAdapter:
             "message": self._inline_out,
             "message-list": lambda items: [self._inline_out(m) for m in items],  # null elements read as None
         }[f.type]
+
+
+def _readable(msg, attr: str) -> bool:
+    try:
+        getattr(msg, attr)
+    except TypeError:
+        return False
+    return True
 
 
 def _name(value) -> str:

@@ -68,27 +68,36 @@ def read_json(path: Path, error=ValueError):
 
 # ---------------------------------------------------------------- case files
 
-def open_corpus(suite_name: str, directory: Path | None = None,
-                groups: frozenset[str] | None = None) -> tuple[Suite, list[Case]]:
-    """The suite and its cases: the packaged corpus, or ``directory`` given as a suite folder (holding
-    ``cases/`` and maybe its own definitions and errata) or as a folder of case files. ``groups``: only the cases
-    of these groups are wanted; the packaged corpus then reads only their files (its manifest says which file
-    holds which group), a folder given instead is read whole."""
+def open_suite(suite_name: str, directory: Path | None = None) -> Suite:
+    """The suite over its packaged data, or over ``directory`` given as a suite folder (holding ``cases/`` and maybe
+    its own definitions and errata) or as a folder of case files (then its parent's data, if any); CorpusError for
+    a folder or suite that cannot be used."""
     try:
         if directory is None:
-            suite = load_suite(suite_name)
-            return suite, read_cases(suite, tuple(suite.case_folders.items()), groups=groups)
+            return load_suite(suite_name)
         folder = Path(directory)
         if not folder.is_dir():
             raise CorpusError(f"{folder}: {'not a directory' if folder.exists() else 'no such directory'}")
         suite = load_suite(suite_name)
         if any((folder / sub).is_dir() for sub in suite.case_folders):
-            suite = load_suite(suite_name, folder)
-            return suite, read_cases(suite, tuple(suite.case_folders.items()))
-        suite = load_suite(suite_name, folder.parent)  # a bare folder of case files: its parent's data, if any
-        return suite, read_cases(suite, ((folder.name, next(iter(suite.case_folders.values()))),), bare=folder)
+            return load_suite(suite_name, folder)
+        return load_suite(suite_name, folder.parent)
     except LookupError as exc:  # an unknown suite
         raise CorpusError(str(exc)) from exc
+
+
+def open_corpus(suite_name: str, directory: Path | None = None,
+                groups: frozenset[str] | None = None) -> tuple[Suite, list[Case]]:
+    """The suite (``open_suite``) and its cases. ``groups``: only the cases of these groups are wanted; the packaged
+    corpus then reads only their files (its manifest says which file holds which group), a folder given instead is
+    read whole."""
+    suite = open_suite(suite_name, directory)
+    if directory is None:
+        return suite, read_cases(suite, tuple(suite.case_folders.items()), groups=groups)
+    folder = Path(directory)
+    if suite.folder == folder:
+        return suite, read_cases(suite, tuple(suite.case_folders.items()))
+    return suite, read_cases(suite, ((folder.name, next(iter(suite.case_folders.values()))),), bare=folder)
 
 
 @cache

@@ -139,3 +139,35 @@ def test_generate_from_needs_out_and_a_suite_that_builds_folders(tmp_path, capsy
     assert "--from FILE and --out DIR go together" in capsys.readouterr().err
     assert main(["generate", "--suite", "ros_acomms", "--from", "x", "--out", str(tmp_path)]) == 2
     assert "builds no folder" in capsys.readouterr().err
+
+
+def test_a_custom_imc_xml_gives_a_pcap_judgement_that_reflects_its_changes(tmp_path, capsys):
+    from imc_conformance.capture.writing import PCAP_HEADER, ethernet_udp, pcap_record
+    from imc_conformance.suites.imc import codec
+
+    _, _, first = generated(tmp_path, "first", imc_xml())
+    changed = MESSAGES.replace('abbrev="depth" type="fp32_t"', 'abbrev="depth" type="fp64_t"') + \
+        '<message id="3" name="Extra" abbrev="Extra"><field name="N" abbrev="n" type="int16_t"/></message>'
+    suite, _, second = generated(tmp_path, "second", imc_xml(changed))
+    header = {"timestamp": 1.0, "src": 30, "src_ent": 1, "dst": 0xFFFF, "dst_ent": 0xFF}
+    frames = [codec.encode(suite.defs, {"abbrev": "Extra", "header": header, "fields": {"n": -2}}, "le"),
+              codec.encode(suite.defs, {"abbrev": "Holder", "header": header,
+                                        "fields": {"depth": 12.5, "inner": None, "items": []}}, "le")]
+    with open(tmp_path / "c.pcap", "wb") as out:
+        out.write(PCAP_HEADER)
+        for i, frame in enumerate(frames):
+            out.write(pcap_record(1.7e9 + i, ethernet_udp("10.0.0.30", 6002, "10.0.0.1", 6001, frame, i)))
+
+    def judged(folder) -> dict:
+        main(["pcap", str(tmp_path / "c.pcap"), "--vectors", str(folder), "--json", str(tmp_path / "r.json")])
+        doc = json.loads((tmp_path / "r.json").read_text())
+        return {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}, doc["notes"]
+
+    verdicts, _ = judged(second)  # the XML the frames were made with: both judged, both valid
+    assert verdicts == {"imc/Extra/capture/frame/valid": "PASS", "imc/Holder/capture/frame/valid": "PASS"}
+    verdicts, notes = judged(first)  # the XML before the change: Extra unknown, Holder's fp64 depth misread
+    assert "imc/Extra/capture/frame/valid" not in verdicts and "id 3 (1)" in " ".join(notes)
+    assert "imc/Holder/capture/frame/valid" not in verdicts and "FAIL" in verdicts.values()
+    capsys.readouterr()
+    assert main(["pcap", str(tmp_path / "c.pcap"), "--vectors", str(tmp_path / "nowhere")]) == 2
+    assert "no such directory" in capsys.readouterr().err

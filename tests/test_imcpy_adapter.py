@@ -10,6 +10,7 @@ from imc_conformance.adapter_api import Rejected, Unsupported
 from imc_conformance.adapters.imcpy_adapter import ImcpyAdapter, adapter
 from imc_conformance.suites.imc.crc16 import crc16
 from imc_conformance.suites.imc.definitions import load_definitions
+from imc_conformance.suites.imc.whole import imc_xml_definitions
 
 DEFS = load_definitions()
 HEADER = {"timestamp": 1700000000.5, "src": 30, "src_ent": 42, "dst": 0x1234, "dst_ent": 7}
@@ -145,8 +146,6 @@ def test_unknown_field_and_message(imc):
     message["fields"]["bogus"] = 1
     assert refusal_rule(imc, message) == "unknown-field"
     assert refusal_rule(imc, {"abbrev": "NoSuchMessage", "fields": {}}) == "unknown-message"
-    with pytest.raises(Unsupported):  # imcpy knows it, the definitions do not
-        imc.encode("imc", {"abbrev": "EstimatedState", "fields": {}}, "le")
 
 
 def test_typed_inline_fields_refuse_other_messages(imc):
@@ -186,12 +185,26 @@ def test_non_ascii_plaintext_decodes_lossily(imc):
     assert imc.decode("imc", frame)["fields"] == {"origin": "\ufffd\ufffd", "text": "A\ufffdB"}
 
 
-def test_messages_without_definition_decode_by_name(imc):
-    frame = imcpy.EstimatedState().serialize()
-    assert imc.decode("imc", frame) == {"abbrev": "EstimatedState", "header": DEFS.header_defaults, "fields": {}}
+def test_messages_beyond_the_definitions_go_through_the_imc_xml_imcpy_was_built_from(imc):
+    xml = imc_xml_definitions()
+    state = imcpy.EstimatedState()
+    state.depth = 12.5
+    decoded = imc.decode("imc", state.serialize())
+    assert decoded["abbrev"] == "EstimatedState" and decoded["fields"]["depth"] == 12.5
+    assert list(decoded["fields"]) == [f.abbrev for f in xml["EstimatedState"].fields]
     outer = imcpy.AcousticMessage()
-    outer.message = imcpy.EstimatedState()
-    assert imc.decode("imc", outer.serialize())["fields"] == {"message": {"abbrev": "EstimatedState", "fields": {}}}
+    outer.message = state
+    assert imc.decode("imc", outer.serialize())["fields"]["message"]["fields"]["depth"] == 12.5
+    frame = imc.encode("imc", {"abbrev": "EstimatedState", "fields": {"depth": 12.5, "psi": 0.5}}, "le")
+    assert (imcpy.Packet.deserialize(frame).depth, imcpy.Packet.deserialize(frame).psi) == (12.5, 0.5)
+
+
+def test_boolean_fields_the_binding_cannot_read_are_unsupported_not_errors(imc):
+    """Erratum I6: imcpy's getters of IMC.xml's Boolean enumeration raise TypeError; encoding works."""
+    frame = imc.encode("imc", {"abbrev": "Sample", "fields": {"syringe0": 1}}, "le")
+    assert codec.decode(imc_xml_definitions(), frame)["fields"]["syringe0"] == 1
+    with pytest.raises(Unsupported, match="cannot return Sample.syringe0"):
+        imc.decode("imc", frame)
 
 
 def test_oversized_message_is_a_size_limit(imc):

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import importlib
 
-from ..suites import names as suite_names
+from ..suites import packages as suite_packages
 
 COMMANDS = {"run": "run", "list": "listing", "report": "report", "generate": "generate", "pcap": "pcap",
             "watch": "watch", "fuzz": "fuzz", "mutants": "mutants",
@@ -17,7 +17,7 @@ def suite_commands() -> dict[str, object]:
     """Each suite's own commands: name -> the module that adds it."""
     root = __name__.rpartition(".")[0]
     out = {}
-    for suite in suite_names():
+    for suite in suite_packages():
         name = f"{root}.suites.{suite}.commands"
         try:
             module = importlib.import_module(name)

@@ -10,7 +10,7 @@ import math
 from pathlib import Path
 
 from ..limits import SHARDS_MAX, STARTUP_MAX, TIME_SCALE_MAX
-from ..suites import names as suite_names
+from ..suites import names as suite_names, variants as suite_variants
 
 REPORTS = ("json", "junit", "markdown", "html")
 DEFAULT_MEMORY_MB = 2048
@@ -128,7 +128,8 @@ probability = real(lambda v: 0 <= v < 1, "give a share between 0 and 1")
 
 def add_suite(parser) -> None:
     parser.add_argument("--suite", default=suite_names()[0], choices=suite_names(),
-                        help="imc (default): IMC messages 150-216; ros_acomms: ros_acomms_msgs types")
+                        help="imc (default): IMC messages 150-216; ros_acomms: ros_acomms_msgs types; "
+                             + "; ".join(f"{name}: {text}" for name, (_, text) in suite_variants().items()))
 
 
 def add_selection(parser) -> None:
@@ -207,6 +208,8 @@ def add_target(live, what: str) -> None:
 def add_judging(parser) -> None:
     """The options pcap and watch share: what to judge against, which frames, how to report."""
     add_suite(parser)
+    parser.add_argument("--vectors", type=Path, metavar="DIR",
+                        help="a suite folder whose definitions to judge with (e.g. one made by generate --from)")
     parser.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
     parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
                         help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")

@@ -35,9 +35,9 @@ def add(sub) -> None:
 
 def capture_rules(args):
     """The suite, its capture rules and the edition the options name; usage errors for what they cannot be."""
-    from ..suites import load_suite
+    from ..files import open_suite
 
-    suite = load_suite(args.suite)
+    suite = open_suite(args.suite, args.vectors)
     try:
         rules = suite.capture_rules()
     except ValueError as exc:

@@ -15,9 +15,9 @@ from ..suites.imc.codec import FOOTER_SIZE, HEADER_SIZE, byte_order_of
 from ..suites.imc.crc16 import crc16
 from .byteorder import packing, prefix
 from .fields import Checksum, Enum, Float, Number
-from .messages import Message, message_class
+from .messages import Message, definitions, message_class
 
-_DEFS = load_suite("imc").defs
+_DEFS = load_suite("imc").defs  # the frame's constants (sync, header defaults) are the same in any IMC definitions
 SYNC = _DEFS.sync  # 0xFE54: bytes 54 FE, little-endian
 SWAPPED_SYNC = int.from_bytes(SYNC.to_bytes(2, "big"), "little")  # 0x54FE: bytes FE 54, big-endian
 HEADER_FIELDS = ("timestamp", "src", "src_ent", "dst", "dst_ent")  # those of the decoded form
@@ -66,7 +66,7 @@ class FrameMessage(Field):
         return s[size:], self.m2i(pkt, s[:size])
 
     def m2i(self, pkt, data: bytes):
-        if len(data) == pkt.size and pkt.mgid in _DEFS.by_id:
+        if len(data) == pkt.size and pkt.mgid in definitions().by_id:
             message = message_class(pkt.mgid)()
             try:
                 message.dissect(data)
@@ -77,6 +77,20 @@ class FrameMessage(Field):
         return conf.raw_layer(data) if data else None
 
 
+MESSAGE_ID = MessageId("mgid", None, "H", {})
+
+
+def name_messages(defs) -> None:
+    """Show (and accept) message ids by the abbreviations of ``defs``."""
+    for table, items in ((MESSAGE_ID.i2s, ((m.id, m.abbrev) for m in defs.messages)),
+                         (MESSAGE_ID.s2i, ((m.abbrev, m.id) for m in defs.messages))):
+        table.clear()
+        table.update(items)
+
+
+name_messages(_DEFS)
+
+
 class IMC(Packet):
     """An IMC frame. ``sync`` is ``le`` (0xFE54, bytes 54 FE) or ``be`` (0x54FE read little-endian, bytes
     FE 54) and sets the byte order of everything else; ``mgid``, ``size`` and ``crc16`` left None are
@@ -85,7 +99,7 @@ class IMC(Packet):
     name = "IMC"
     fields_desc = [
         Cut(LEShortEnumField("sync", SYNC, {SYNC: "le", SWAPPED_SYNC: "be"})),
-        Cut(MessageId("mgid", None, "H", {m.id: m.abbrev for m in _DEFS.messages})),
+        Cut(MESSAGE_ID),
         Cut(Number("size", None, "H")),
         Cut(Float("timestamp", _DEFS.header_defaults["timestamp"], 8, "s")),
         Cut(Number("src", _DEFS.header_defaults["src"], "H")),

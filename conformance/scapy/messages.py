@@ -42,9 +42,24 @@ class NullMessage(Packet):
     name = "null message"
 
 
+_chosen: list = []  # the definitions use_definitions chose, if it was called
+
+
+def definitions():
+    """The definitions the layer dissects and builds with: the IMC suite's (the seeds' messages), unless
+    ``use_definitions`` chose others."""
+    return _chosen[0] if _chosen else load_suite("imc").defs
+
+
+def choose(defs) -> None:
+    """Generate message classes from ``defs`` from now on (``imc_conformance.scapy.use_definitions``)."""
+    _chosen[:] = [defs]
+    _generated.cache_clear()
+
+
 def message_class(key: int | str) -> type[Message]:
     """The class of the message with this id or abbreviation, generated on first use; KeyError if none."""
-    return _generated(load_suite("imc").defs[key].abbrev)
+    return _generated(definitions()[key].abbrev)
 
 
 def __getattr__(name: str) -> type[Message]:
@@ -57,7 +72,7 @@ def __getattr__(name: str) -> type[Message]:
 
 @cache
 def _generated(abbrev: str) -> type[Message]:
-    mdef = load_suite("imc").defs.by_abbrev[abbrev]
+    mdef = definitions().by_abbrev[abbrev]
     return type(abbrev, (Message,), {"__module__": __name__, "name": abbrev, "definition": mdef,
                                      "fields_desc": [field_of(f) for f in mdef.fields]})
 
@@ -69,6 +84,8 @@ def field_of(f: FieldDef) -> Field:
     if f.is_int:
         names = {v.value: v.abbrev for v in f.enum_values}
         kind = {"enum": Enum, "bitfield": Flags}.get(f.enum_kind)
+        if kind is Flags:  # scapy names single bits only (IMC.xml's tables also name 0 and masks)
+            names = {value: name for value, name in names.items() if value > 0 and not value & (value - 1)}
         code = SCALAR_FORMATS[f.type]
         return kind(f.abbrev, 0, code, names) if kind else Number(f.abbrev, 0, code, f.unit)
     return {"plaintext": Text, "rawdata": Data, "message": InlineMessage, "message-list": MessageList}[f.type](f.abbrev)
@@ -77,7 +94,7 @@ def field_of(f: FieldDef) -> Field:
 def read_inline(s: bytes) -> tuple[bytes, Message | None]:
     """An inline message from the start of ``s`` (None for the null id) and the bytes after it."""
     (mgid,) = struct.unpack(prefix() + "H", s[:2])
-    if mgid == load_suite("imc").defs.null_id:
+    if mgid == definitions().null_id:
         return s[2:], None
     message = message_class(mgid)()
     return message.do_dissect(s[2:]), message
@@ -85,7 +102,7 @@ def read_inline(s: bytes) -> tuple[bytes, Message | None]:
 
 def write_inline(message: Message | NullMessage | None) -> bytes:
     if message is None or isinstance(message, NullMessage):
-        return struct.pack(prefix() + "H", load_suite("imc").defs.null_id)
+        return struct.pack(prefix() + "H", definitions().null_id)
     return struct.pack(prefix() + "H", message.definition.id) + raw(message)
 
 

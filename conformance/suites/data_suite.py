@@ -143,22 +143,30 @@ class DataSuite(Suite):
         return read_data_file(path, self.data_schemas.get("errata.json"), self.packaged)["errata"]
 
 
+def manifest_entries(files: dict[str, str | bytes], kinds: dict[str, str], group_of) -> dict[str, dict]:
+    """The manifest entries of a folder's JSON ``files`` (relative path -> content): the SHA-256 of each, and for a
+    case file (under one of the ``kinds`` folders) its group (``group_of(doc)``) and kind."""
+    entries = {}
+    for name in sorted(n for n in files if n.endswith(".json") and n != MANIFEST):
+        data = files[name] if isinstance(files[name], bytes) else files[name].encode("utf-8")
+        entry = {"sha256": hashlib.sha256(data).hexdigest()}
+        folder = name.split("/")[0]
+        if "/" in name and folder in kinds:
+            entry.update(group=group_of(json.loads(data)), kind=kinds[folder])
+        entries[name] = entry
+    return entries
+
+
 def manifest_text(suite: DataSuite, files: dict[str, str]) -> str:
     """The manifest of the suite's packaged folder once the generated ``files`` are written: the SHA-256 of every
     JSON file in it (case files also with their group and kind), so a run can trust them without checking each."""
-    root, kinds = suite.packaged, suite.case_folders
+    root = suite.packaged
     names = {p.relative_to(root).as_posix() for p in root.rglob("*.json")} | {n for n in files if n.endswith(".json")}
-    entries = {}
-    for name in sorted(names - {MANIFEST}):
-        text = files[name] if name in files else (root / name).read_text(encoding="utf-8")
-        entry = {"sha256": hashlib.sha256(text.encode("utf-8")).hexdigest()}
-        folder = name.split("/")[0]
-        if "/" in name and folder in kinds:
-            entry.update(group=suite.group_of(json.loads(text)), kind=kinds[folder])
-        entries[name] = entry
+    every = {n: files[n] if n in files else (root / n).read_text(encoding="utf-8") for n in names - {MANIFEST}}
     doc = {"$schema": "../schema/manifest.schema.json", "format": 1, "description": "Written by imc-conformance generate: the SHA-256 of every JSON file of this "
                                        "folder as built and checked; a run trusts a file whose bytes match and checks "
-                                       "any other against its schema.", "files": entries}
+                                       "any other against its schema.",
+           "files": manifest_entries(every, suite.case_folders, suite.group_of)}
     return json.dumps(doc, indent=1) + "\n"
 
 

@@ -40,7 +40,10 @@ class ImcCaptureRules:
         self.seen: dict[bytes, dict] = {}  # decoded fields by payload, for the watched messages
 
     def exchanges(self, edition: str, scale: float) -> PassiveExchanges:
-        tracker = PassiveExchanges(self.wire, (self.behaviour or {}).get("exchanges", []), edition, scale, UNKNOWN_SYSTEM)
+        known = self.defs.by_abbrev  # a folder's own definitions may lack the messages of some exchanges
+        exchanges = [ex for ex in (self.behaviour or {}).get("exchanges", [])
+                     if ex["request"]["message"] in known and ex["reply"] in known]
+        tracker = PassiveExchanges(self.wire, exchanges, edition, scale, UNKNOWN_SYSTEM)
         self.watched = {self.defs[m].id for m in tracker.messages}
         return tracker
 

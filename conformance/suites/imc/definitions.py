@@ -181,6 +181,9 @@ def lint_definitions(defs: Definitions) -> list[str]:
                         f"{m.abbrev}.{f.abbrev}: {v.abbrev} = {v.value} does not fit {f.type} "
                         f"[{lo}, {hi}] (editions: {editions})"
                     )
+                elif (f.minimum is not None and v.value < f.minimum) or (f.maximum is not None and v.value > f.maximum):
+                    problems.append(f"{m.abbrev}.{f.abbrev}: {v.abbrev} = {v.value} is outside the field's min/max "
+                                    f"[{f.minimum}, {f.maximum}]: its cases are acceptable")
             for t in f.message_types:
                 if t not in defs.by_abbrev:
                     problems.append(f"{m.abbrev}.{f.abbrev}: message type {t} is not defined")

@@ -60,9 +60,9 @@ class ImcSuite(DataSuite):
                     "exchanges.json": "exchanges.schema.json", "statements.json": "statements.schema.json",
                     "errata.json": "errata.schema.json", "ambiguities.json": "ambiguities.schema.json"}
 
-    def __init__(self, folder: Path, defs: Definitions):
+    def __init__(self, folder: Path, defs: Definitions, packaged: Path = IMC, title: str = "IMC"):
         super().__init__(folder)
-        self.defs = defs
+        self.defs, self.packaged, self.title = defs, packaged, title
         # the newest first: what imcpy and deployed DUNE speak (5.4.30) before the seeds' (5.4.11)
         self.editions = tuple(sorted(defs.editions, key=lambda e: tuple(map(int, e[4:].split("."))), reverse=True))
 
@@ -184,3 +184,10 @@ def load(folder: Path | None = None) -> ImcSuite:
         return ImcSuite(folder, load_definitions())
     doc = read_data_file(own, ImcSuite.data_schemas["definitions.json"], IMC)
     return ImcSuite(folder, parse_definitions(doc))
+
+
+def load_whole(folder: Path) -> ImcSuite:
+    """The IMC suite over a whole-protocol folder (``whole.whole_folder``): its files are trusted by its own
+    manifest, as the packaged folder's are."""
+    defs = parse_definitions(read_data_file(folder / "definitions.json", ImcSuite.data_schemas["definitions.json"], folder))
+    return ImcSuite(folder, defs, packaged=folder, title="IMC (whole protocol)")

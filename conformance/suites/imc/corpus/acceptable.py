@@ -72,12 +72,22 @@ def field_cases(mc: MessageCases, f: FieldDef):
         for bit in sorted({undefined[0], undefined[-1]}) if undefined else ():  # a table of every bit has none
             yield (f"bitfield-undefined/{f.abbrev}/0x{bit:x}", bit, RECEIVERS, ["bitfield", "undefined-bit"],
                    {"comment": "A bit the table does not define; DUNE and imcpy carry it unchanged."})
+    elif f.is_int and (f.minimum is not None or f.maximum is not None):
+        lo, hi = f.int_bounds
+        rlo, rhi = samples.int_range(f)
+        seen = set()
+        for name, value in (("below-min", rlo - 1), ("type-min", lo), ("above-max", rhi + 1), ("type-max", hi)):
+            if value in seen or not lo <= value <= hi or rlo <= value <= rhi:
+                continue
+            seen.add(value)
+            yield (f"out-of-range/{f.abbrev}/{name}", value, f.range_source, ["out-of-range", f"class:{name}"],
+                   {"comment": "Outside the field's declared min/max; validation is optional, DUNE and imcpy carry it."})
     elif f.is_float and (f.minimum is not None or f.maximum is not None):
         outside = {"nan": "nan", "inf": "inf", "negative-inf": "-inf"}
         if f.minimum is not None:
-            outside["below-min"] = next_float(f, f.minimum, -1)
+            outside["below-min"] = samples.next_float(f, f.minimum, -1)
         if f.maximum is not None:
-            outside["above-max"] = next_float(f, f.maximum, +1)
+            outside["above-max"] = samples.next_float(f, f.maximum, +1)
             outside["max-finite"] = F32_MAX if f.size == 4 else 1.7976931348623157e308
         for name, value in outside.items():
             yield (f"out-of-range/{f.abbrev}/{name}", value, f.range_source, ["out-of-range", f"class:{name}"],
@@ -125,17 +135,6 @@ def add_out_of_type(mc: MessageCases, filled: dict, f: FieldDef, v) -> None:
 
 def erratum_of(v) -> str | None:
     return v.source.split("#", 1)[1] if v.source.startswith("imc-wire#E") else None
-
-
-def next_float(f: FieldDef, x: float, direction: int) -> float:
-    """The next representable value of the field's width after ``x`` in ``direction``."""
-    fmt, ifmt = ("<f", "<i") if f.size == 4 else ("<d", "<q")
-    x = struct.unpack(fmt, struct.pack(fmt, x))[0]
-    if x == 0:  # either side of zero: the smallest subnormal, of the direction's sign
-        return direction * struct.unpack(fmt, struct.pack(ifmt, 1))[0]
-    bits = struct.unpack(ifmt, struct.pack(fmt, x))[0]
-    bits += direction if x >= 0 else -direction
-    return struct.unpack(fmt, struct.pack(ifmt, bits))[0]
 
 
 def with_unused_payload(frame: bytes, order: str, extra: int) -> bytes:

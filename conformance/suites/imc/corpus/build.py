@@ -52,13 +52,16 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
 
 
 def message_files(defs: Definitions, examples: dict[str, list[dict]] | None = None,
-                  promoted: dict[str, list[dict]] | None = None, schema: str | None = "../../schema") -> dict[str, str]:
-    """The case file of every message the definitions cover and the coverage table (``examples``: realistic
-    messages, ``promoted``: kept fuzz findings, by message; ``schema``: the schema folder relative to cases/, for
-    editors, None where there is none)."""
+                  promoted: dict[str, list[dict]] | None = None, schema: str | None = "../../schema",
+                  only: frozenset[str] | None = None) -> dict[str, str]:
+    """The case file of every message the definitions cover (``only``: of these messages) and the coverage table
+    (``examples``: realistic messages, ``promoted``: kept fuzz findings, by message; ``schema``: the schema folder
+    relative to cases/, for editors, None where there is none)."""
     files: dict[str, str] = {}
     per_message = {}
     for mdef in defs.suite_messages:
+        if only is not None and mdef.abbrev not in only:
+            continue
         mc = MessageCases(defs, mdef)
         add_valid(mc, (examples or {}).get(mdef.abbrev, []))
         add_acceptable(mc)

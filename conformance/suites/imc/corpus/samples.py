@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import copy
+import math
+import struct
 
 from ..definitions import Definitions, FieldDef, MessageDef
 
@@ -12,13 +14,17 @@ FILLED_INTS = {"uint8_t": 42, "int8_t": -5, "uint16_t": 4660, "int16_t": -1234, 
 
 
 def default_value(f: FieldDef):
-    """The zero of the field's type; for an enum whose table lacks 0, its lowest value in every edition."""
+    """The zero of the field's type, or the bound of its min/max nearest zero; for an enum whose table lacks 0, its
+    lowest value in every edition."""
     if f.enum_kind == "enum" and not any(v.value == 0 for v in f.enum_values):
         return min(v.value for v in f.enum_values if v.editions is None)
     if f.is_float:
-        return 0.0
+        if in_float_range(f, 0.0):
+            return 0.0
+        return bound_inside(f, f.minimum, +1) if f.minimum is not None and f.minimum > 0 else bound_inside(f, f.maximum, -1)
     if f.is_int:
-        return 0
+        lo, hi = int_range(f)
+        return min(max(0, lo), hi)
     return {"plaintext": "", "rawdata": "", "message": None, "message-list": []}[f.type]
 
 
@@ -50,10 +56,11 @@ def filled_value(defs: Definitions, f: FieldDef, depth: int = 1):
         values = common_enum_values(defs, f)
         return next((v for v in values if v != 0), values[0])
     if f.is_int:
-        return FILLED_INTS[f.type]
+        lo, hi = int_range(f)
+        return min(max(FILLED_INTS[f.type], lo), hi)
     if f.is_float:
         if f.minimum is not None or f.maximum is not None:
-            return 0.5
+            return next((x for x in (0.5, -0.5, 0.0) if in_float_range(f, x)), f.minimum if f.minimum is not None else f.maximum)
         return 1.5 if f.type == "fp32_t" else 0.25
     if f.type == "plaintext":
         return "imc"
@@ -64,6 +71,46 @@ def filled_value(defs: Definitions, f: FieldDef, depth: int = 1):
     if f.type == "message":
         return element
     return [element] if element is not None else []
+
+
+def int_range(f: FieldDef) -> tuple[int, int]:
+    """The integers an integer field may hold: its type's, narrowed by the definition's min and max."""
+    lo, hi = f.int_bounds
+    if f.minimum is not None:
+        lo = max(lo, math.ceil(f.minimum))
+    if f.maximum is not None:
+        hi = min(hi, math.floor(f.maximum))
+    return lo, hi
+
+
+def at_width(f: FieldDef, x: float) -> float:
+    """``x`` as a float field of ``f``'s width holds it."""
+    fmt = "<f" if f.size == 4 else "<d"
+    return struct.unpack(fmt, struct.pack(fmt, x))[0]
+
+
+def in_float_range(f: FieldDef, x: float) -> bool:
+    """Whether ``x``, once at the field's width, is within the definition's min and max."""
+    x = at_width(f, x)
+    return (f.minimum is None or x >= f.minimum) and (f.maximum is None or x <= f.maximum)
+
+
+def next_float(f: FieldDef, x: float, direction: int) -> float:
+    """The next representable value of the field's width after ``x`` in ``direction``."""
+    fmt, ifmt = ("<f", "<i") if f.size == 4 else ("<d", "<q")
+    x = at_width(f, x)
+    if x == 0:  # either side of zero: the smallest subnormal, of the direction's sign
+        return direction * struct.unpack(fmt, struct.pack(ifmt, 1))[0]
+    bits = struct.unpack(ifmt, struct.pack(fmt, x))[0]
+    bits += direction if x >= 0 else -direction
+    return struct.unpack(fmt, struct.pack(ifmt, bits))[0]
+
+
+def bound_inside(f: FieldDef, bound: float, direction: int) -> float:
+    """The value of the field's width nearest a range bound on the range's side (``direction`` +1 for a minimum,
+    -1 for a maximum): an fp32 field cannot hold every fp64 bound (π rounds past it)."""
+    x = at_width(f, bound)
+    return x if (x - bound) * direction >= 0 else next_float(f, x, direction)
 
 
 def filled_inline(defs: Definitions, mdef: MessageDef, depth: int) -> dict:

@@ -25,7 +25,7 @@ CONTROL = "".join(chr(c) for c in (0x00, 0x09, 0x0A, 0x0D, 0x1B, 0x7F))
 def float_in_range(f: FieldDef, value) -> bool:
     if isinstance(value, str):
         return f.minimum is None and f.maximum is None
-    return (f.minimum is None or value >= f.minimum) and (f.maximum is None or value <= f.maximum)
+    return samples.in_float_range(f, value)
 
 
 def add_valid(mc: MessageCases, examples: list[dict]) -> None:
@@ -65,9 +65,13 @@ def field_variants(mc: MessageCases, f: FieldDef):
             lo, hi = f.int_bounds
             if not lo <= v.value <= hi:
                 continue  # cannot fit the field type: an acceptable encode case (see acceptable.py)
+            rlo, rhi = samples.int_range(f)
             expect = ("valid" if v.editions is None else
                       {e: ("valid" if e in v.editions else "acceptable") for e in defs.editions})
             tags = ["enum", f"value:{v.abbrev}"] + ([] if v.editions is None else ["edition-specific"])
+            if not rlo <= v.value <= rhi:  # the table and the field's min/max disagree: either reading holds
+                expect = {e: "acceptable" for e in defs.editions}
+                tags.append("out-of-range")
             yield f"enum/{f.abbrev}/{v.abbrev}-{v.value}", v.value, v.source, tags, expect
         return
     if f.enum_kind == "bitfield":
@@ -78,19 +82,26 @@ def field_variants(mc: MessageCases, f: FieldDef):
         return
     if f.is_int:
         lo, hi = f.int_bounds
+        rlo, rhi = samples.int_range(f)
         classes = {"min": lo, "max": hi, "zero": 0, "one": 1}
         if lo < 0:
             classes["minus-one"] = -1
+        if f.minimum is not None:
+            classes["range-min"] = rlo
+        if f.maximum is not None:
+            classes["range-max"] = rhi
         for name, value in classes.items():
-            yield f"boundary/{f.abbrev}/{name}", value, f.clause, ["boundary", f"class:{name}"], "valid"
+            if rlo <= value <= rhi:
+                clause = f.range_source if name.startswith("range-") else f.clause
+                yield f"boundary/{f.abbrev}/{name}", value, clause, ["boundary", f"class:{name}"], "valid"
         return
     if f.is_float:
         width = f.size
         classes = {name: vals[0 if width == 4 else 1] for name, vals in FLOAT_CLASSES.items()}
         if f.minimum is not None:
-            classes["range-min"] = f.minimum
+            classes["range-min"] = samples.bound_inside(f, f.minimum, +1)
         if f.maximum is not None:
-            classes["range-max"] = f.maximum
+            classes["range-max"] = samples.bound_inside(f, f.maximum, -1)
         for name, value in classes.items():
             if float_in_range(f, value) and not (name in NON_FINITE and (f.minimum is not None or f.maximum is not None)):
                 clause = f.range_source if name.startswith("range-") else f.clause
