@@ -10,7 +10,9 @@ It behaves as the imcpy library adapter does, quirks included, but shares no cod
 order and types come from ``vectors/imc/definitions.json`` (next to this file's parent folder, or
 ``--definitions``) and one converter per message is built at start. imcpy emits little-endian only
 (``be`` is unsupported); its plaintext getter turns every non-ASCII byte into U+FFFD and the shim
-reports that str; a value a setter refuses (UNSUPPORTED = 666 in a uint8) is refused. DUNE's error
+reports that str; a value a setter refuses (UNSUPPORTED = 666 in a uint8) is refused; a field whose getter
+has no Python type (IMC.xml's Boolean enumeration: Sample.syringe0, GetWorldCoordinates.tracking) makes a decode
+unsupported. For ``--suite imc-full`` the runner passes the whole protocol's definitions. DUNE's error
 texts map to rules: "invalid CRC" -> ``crc``, "invalid synchronization number" -> ``sync``, "invalid
 message size" -> ``size-limit``, anything else no rule. Floats are answered at their width without
 shortest-decimal canonicalisation; ``nan``/``inf``/``-inf``, ``-0.0`` and NaN payloads are kept.
@@ -80,9 +82,9 @@ class Converter:
     def __init__(self, shim: ImcpyShim, abbrev: str, fields: list[Field]):
         proto = imcpy.Factory.produce(abbrev)
         self.abbrev, self.cls, self.put, self.get = abbrev, type(proto), {}, []
-        for f in fields:
-            attr = f.abbrev if hasattr(proto, f.abbrev) else f.abbrev.lower()
-            if not hasattr(proto, attr):
+        for f in fields:  # looked up on the class: reading some attributes fails (Boolean fields, below)
+            attr = f.abbrev if hasattr(self.cls, f.abbrev) else f.abbrev.lower()
+            if not hasattr(self.cls, attr):
                 raise AttributeError(f"imcpy's {abbrev} has no attribute {f.abbrev!r} nor {attr!r}")
             self.put[f.abbrev] = shim.putter(f, attr, f"{abbrev}.{f.abbrev}")
             self.get.append((f.abbrev, attr, shim.getter(f)))
@@ -97,7 +99,15 @@ class Converter:
             put(msg, value)
 
     def fields(self, msg) -> dict:
-        return {name: get(getattr(msg, attr)) for name, attr, get in self.get}
+        out = {}
+        for name, attr, get in self.get:
+            try:
+                value = getattr(msg, attr)
+            except TypeError as exc:  # imcpy's binding has no Python type for DUNE's Boolean enumeration
+                raise Unsupported(f"imcpy's binding cannot return {self.abbrev}.{name}: "
+                                  f"{first_line(exc).split(' The signature')[0]}") from exc
+            out[name] = get(value)
+        return out
 
 
 class ImcpyShim:

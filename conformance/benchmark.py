@@ -16,6 +16,9 @@ target with ``met`` or ``MISSED`` and the figure measured before the start-up wo
 - live: the IMC scenario set against the reference node over loopback UDP, whole process, and in protocol time
   (virtual: exactly the waits a live run makes) against it and every broken node; once, the robustness phase;
 - capture: ``imc-conformance pcap`` on a generated capture of a million frames, whole command, and reading alone;
+- the whole protocol (issue 22): ``generate --from`` the IMC.xml imcpy ships, the ``imc-full`` folder built on
+  first use, ``list`` of one of its messages, and ``run --suite imc-full --adapter imcpy`` per case beside the seed
+  suite's (whole processes);
 - fuzzing (once each): generated messages against imcpy through hypothesis, the frame-mutation sweep against imcpy
   (beside imcpy's bare decode of such frames), the differential run of imcpy and pyimclsts (1,000 examples per
   message, whole process) and the mutants of both suites.
@@ -68,6 +71,11 @@ TARGETS = (
     ("fuzz: differential, 1,000 examples per message, imcpy vs pyimclsts, whole process", "fuzz differential", "s",
      300, None),
     ("mutants of both suites, corpus and fuzzer", "mutants", "s", 180, None),
+    ("whole protocol: generate --from IMC.xml (338 messages), whole process", "whole generate", "s", 30, None),
+    ("whole protocol: the imc-full folder built on first use, whole process", "whole first", "s", 30, None),
+    ("whole protocol: list --suite imc-full --message EstimatedState, whole process", "whole list", "ms", 150, None),
+    ("whole protocol: run --suite imc-full --adapter imcpy, time per case vs the seed suite's", "whole ratio", "x",
+     2.0, None),
 )
 COUNTS: dict[str, int] = {}  # cases or frames of the rate rows, filled as they are measured
 
@@ -488,12 +496,47 @@ def fuzz_rows(suite, everything) -> dict[str, float]:
     return out
 
 
+def whole_rows(repeat: int) -> dict[str, float]:
+    """The whole protocol, whole processes: generation, the first use of imc-full (a cache holding only the IMC.xml),
+    a selection from it, and a run of it with imcpy per case beside the seed suite's."""
+    import shutil
+
+    from .suites.imc.imc_xml import fetch_imc_xml
+
+    xml, env = fetch_imc_xml(), command_env()
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="imc-conformance-whole-") as folder:
+        out["whole generate"] = median_of(min(repeat, 3), lambda: whole(
+            ["generate", "--from", str(xml), "--out", str(Path(folder) / "out")], env))
+
+        def first():
+            with tempfile.TemporaryDirectory(prefix="imc-conformance-cache-") as cache:
+                shutil.copy(xml, Path(cache) / xml.name)
+                whole(["list", "--suite", "imc-full", "--message", "EstimatedState"], command_env(cache))
+        out["whole first"] = median_of(min(repeat, 3), first)
+    whole(["list", "--suite", "imc-full", "--message", "Heartbeat"], env)  # the folder built in this cache
+    out["whole list"] = median_of(repeat, lambda: whole(["list", "--suite", "imc-full", "--message", "EstimatedState"], env))
+    counts = {}
+    for suite in ("imc", "imc-full"):
+        counts[suite] = sum("/scenario/" not in line and "/robustness/" not in line for line in subprocess.run(
+            [sys.executable, "-m", "imc_conformance.cli", "list", "--suite", suite], capture_output=True, text=True,
+            env=env, cwd=tempfile.gettempdir(), check=True).stdout.splitlines())
+        out[f"whole run {suite}"] = median_of(repeat, lambda s=suite: whole(
+            ["run", "--suite", s, "--adapter", "imcpy", "--no-progress"], env))
+    out["whole ratio"] = (out["whole run imc-full"] / counts["imc-full"]) / (out["whole run imc"] / counts["imc"])
+    print(f"whole protocol: generate --from IMC.xml {out['whole generate']:.1f} s; imc-full built on first use "
+          f"{out['whole first']:.1f} s; list one message {out['whole list'] * 1e3:.0f} ms; run with imcpy "
+          f"{out['whole run imc-full']:.2f} s for {counts['imc-full']:,} cases against {out['whole run imc']:.2f} s for "
+          f"{counts['imc']:,} (per case {out['whole ratio']:.2f}x)")
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m imc_conformance.benchmark", description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--json", metavar="FILE", help="also write every median and target as JSON")
-    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "fuzz"):
+    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "fuzz", "whole"):
         parser.add_argument(f"--skip-{part}", action="store_true")
     args = parser.parse_args(argv)
 
@@ -515,6 +558,8 @@ def main(argv: list[str] | None = None) -> int:
         medians |= capture_rows(suite, min(args.repeat, 3))
     if not args.skip_fuzz:
         medians |= fuzz_rows(suite, everything)
+    if not args.skip_whole:
+        medians |= whole_rows(args.repeat)
     installed.cleanup()
     lines = target_lines(medians)
     print("\n".join(lines))

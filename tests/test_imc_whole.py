@@ -104,10 +104,15 @@ def judged(adapter, whole, name: str):
     return [c for m in result.messages for c in m.cases]
 
 
-def test_imcpy_judged_over_the_whole_protocol_fails_only_where_an_erratum_says_why(whole):
+@pytest.fixture(scope="module")
+def imcpy_cases(whole):
     from imc_conformance.adapters.imcpy_adapter import ImcpyAdapter
 
-    cases = judged(ImcpyAdapter(), whole, "imcpy")
+    return judged(ImcpyAdapter(), whole, "imcpy")
+
+
+def test_imcpy_judged_over_the_whole_protocol_fails_only_where_an_erratum_says_why(imcpy_cases):
+    cases = imcpy_cases
     verdicts = Counter(c.verdict for c in cases)
     assert verdicts[Verdict.PASS] > 40_000 and not verdicts[Verdict.ADAPTER_ERROR]
     failing = [c for c in cases if c.verdict == Verdict.FAIL]
@@ -118,6 +123,15 @@ def test_imcpy_judged_over_the_whole_protocol_fails_only_where_an_erratum_says_w
     assert {c.id.split("/")[1] for c in unsupported} >= {"Sample", "GetWorldCoordinates"}
     assert all("imcpy's binding cannot return Sample.syringe0" in c.detail
                or "imcpy's binding cannot return GetWorldCoordinates.tracking" in c.detail for c in unsupported)
+
+
+def test_the_imcpy_shim_gets_the_library_adapters_verdict_on_every_case(imcpy_cases, tmp_path):
+    """The shim shares no code with the library adapter: told the whole protocol's definitions, it must agree."""
+    assert main(["run", "--suite", "imc-full", "--adapter", "imcpy-shim", "--no-progress",
+                 "--json", str(tmp_path / "shim.json")]) == 1
+    doc = json.loads((tmp_path / "shim.json").read_text())
+    shim = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    assert shim == {c.id: c.verdict.value for c in imcpy_cases}
 
 
 def test_pyimclsts_judged_over_the_whole_protocol_fails_only_where_an_erratum_says_why(whole):

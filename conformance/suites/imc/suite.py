@@ -93,11 +93,12 @@ class ImcSuite(DataSuite):
                                     help="imcpy, DUNE's C++ codec (library)"),
             "pyimclsts": BuiltinAdapter("pyimclsts", library=f"{ADAPTERS_PACKAGE}.pyimclsts_adapter:adapter",
                                         help="pyimclsts (library)"),
-            "imcpy-shim": BuiltinAdapter("imcpy-shim", argv=lambda: shim_argv("imcpy_shim.py"),
-                                         help="imcpy through the subprocess protocol"),
+            "imcpy-shim": BuiltinAdapter("imcpy-shim", argv=lambda: shim_argv("imcpy_shim.py") + (
+                [] if self.packaged == IMC else ["--definitions", str(self.packaged / "definitions.json")]),
+                help="imcpy through the subprocess protocol"),
             "pyimclsts-shim": BuiltinAdapter("pyimclsts-shim", argv=pyimclsts_shim_argv,
                                              help="pyimclsts through the subprocess protocol"),
-            "dune-cpp": BuiltinAdapter("dune-cpp", argv=dune_cpp_argv,
+            "dune-cpp": BuiltinAdapter("dune-cpp", argv=lambda: dune_cpp_argv(self.packaged / "definitions.json"),
                                        help="DUNE's IMC codec in C++, without the binding (subprocess; built on first use)"),
         }
 
@@ -169,10 +170,10 @@ def pyimclsts_shim_argv() -> list[str]:
                                              str(cache_dir() / "pyimclsts-shim")]
 
 
-def dune_cpp_argv() -> list[str]:
+def dune_cpp_argv(definitions: Path) -> list[str]:
     from .dune.codec import argv
 
-    return argv()
+    return argv(definitions)
 
 
 def load(folder: Path | None = None) -> ImcSuite:

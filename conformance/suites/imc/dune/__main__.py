@@ -1,4 +1,4 @@
-"""``python -m imc_conformance.suites.imc.dune build | conformance [...] | restart --run DIR``."""
+"""``python -m imc_conformance.suites.imc.dune build | conformance [...] | record [...] | restart --run DIR``."""
 
 from __future__ import annotations
 
@@ -13,11 +13,14 @@ def main(argv: list[str]) -> int:
     if command == "conformance":
         from .conformance import main as conformance
         return conformance(rest)
+    if command == "record":
+        from .conformance import record
+        return record(rest)
     if command == "restart":
         from .conformance import restart_world
         return restart_world(rest)
     print("usage: python -m imc_conformance.suites.imc.dune build | conformance [--reports DIR] [--no-robustness] | "
-          "restart --run DIR", file=sys.stderr)
+          "record [--seconds 120] [--out FILE] | restart --run DIR", file=sys.stderr)
     return 2
 
 

@@ -38,17 +38,17 @@ def configured(dune: Path) -> Path:
     return generated
 
 
-def program(say=lambda text: None) -> Path:
-    """The adapter program, built if need be; raises BuildError (or RuntimeError for a failed download)."""
+def program(say=lambda text: None, definitions: Path = IMC / "definitions.json") -> Path:
+    """The adapter program for the messages of ``definitions`` (a suite's definitions.json), built if need be;
+    raises BuildError (or RuntimeError for a failed download)."""
     with locked(home()):
-        return _build(say)
+        return _build(say, definitions)
 
 
-def _build(say) -> Path:
+def _build(say, definitions: Path) -> Path:
     dune = extract(say)
     generated = configured(dune)
     json_root, _ = debian_packages("debian-nlohmann-json", ("nlohmann-json3-dev",))
-    definitions = IMC / "definitions.json"
     here = adapter_sources()
     gen = home() / "gen" / digest(definitions, here / "dune-imc" / "generate_fields.py")
     if not (gen / "fields.inc").exists():
@@ -66,9 +66,9 @@ def _build(say) -> Path:
     return target if target.exists() else link(objects, target)
 
 
-def argv() -> list[str]:
-    """The command line of the dune-cpp adapter (built on first use)."""
+def argv(definitions: Path = IMC / "definitions.json") -> list[str]:
+    """The command line of the dune-cpp adapter for the messages of ``definitions`` (built on first use)."""
     def say(text: str) -> None:
         print(f"dune-cpp: {text}", file=sys.stderr, flush=True)
 
-    return [str(built("dune-cpp adapter", lambda: program(say)))]
+    return [str(built("dune-cpp adapter", lambda: program(say, definitions)))]

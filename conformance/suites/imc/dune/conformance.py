@@ -57,7 +57,7 @@ def main(argv: list[str]) -> int:
     return _run(args)
 
 
-def _in_namespace(argv: list[str]) -> int:
+def _in_namespace(argv: list[str], command_name: str = "conformance") -> int:
     """Run this same command again inside a new network namespace."""
     if shutil.which("unshare") is None or shutil.which("ip") is None:
         print("make dune-conformance: needs unshare and ip (Debian: util-linux, iproute2)", file=sys.stderr)
@@ -67,7 +67,7 @@ def _in_namespace(argv: list[str]) -> int:
         print(f"make dune-conformance: cannot create a network namespace ({probe.stderr.strip()}): unshare --net "
               "needs root", file=sys.stderr)
         return 2
-    command = ["unshare", "--net", "--", sys.executable, "-m", "imc_conformance.suites.imc.dune", "conformance", *argv]
+    command = ["unshare", "--net", "--", sys.executable, "-m", "imc_conformance.suites.imc.dune", command_name, *argv]
     inner = subprocess.Popen(command, env={**os.environ, INSIDE: "1"})  # unshare execs it: this is its process
     signal.signal(signal.SIGTERM, lambda signum, frame: inner.send_signal(signal.SIGTERM))
     while True:
@@ -241,3 +241,65 @@ def restart_world(argv: list[str]) -> int:
     _restart_both(args.run)
     return 0
 
+
+
+RECORD_PORT = 6001  # where the vehicle sends its traffic in a recording: one of the IMC ports the capture keeps
+
+
+def record(argv: list[str]) -> int:
+    """``python -m imc_conformance.suites.imc.dune record``: DUNE's whole traffic for some seconds, in a recording.
+
+    The vehicle and its peer run as for the scenarios (in a private network namespace), but the vehicle sends DUNE's
+    own list of transported messages (lauv-simulator-1's: estimated state, entity states, CPU usage, plans...) to a
+    socket on loopback; everything on the IMC ports is recorded (pcap)."""
+    parser = argparse.ArgumentParser(prog="python -m imc_conformance.suites.imc.dune record",
+                                     description=record.__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=120.0, help="how long to record (default 120)")
+    parser.add_argument("--out", type=Path, default=Path("reports/dune-whole.pcap"), help="the recording to write")
+    args = parser.parse_args(argv)
+    if not built():
+        print("dune record: DUNE is not built here: run `make dune` first", file=sys.stderr)
+        return 2
+    if os.environ.get(INSIDE) != "1":
+        return _in_namespace(argv, "record")
+    import socket
+
+    problem = _isolate()
+    if problem:
+        print(f"dune record: {problem}", file=sys.stderr)
+        return 2
+    for pid in leftovers():
+        os.kill(pid, signal.SIGKILL)
+    run = home() / "run"
+    shutil.rmtree(run, ignore_errors=True)
+    run.mkdir(parents=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    write_configs(record_to=RECORD_PORT)
+    for system in (VEHICLE, PEER):
+        forget_state(system)
+    gateway, capture = iridium_gateway(), _capture()
+    sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sink.bind(("127.0.0.1", RECORD_PORT))
+    sink.settimeout(0.5)
+    start(run, "peer", dune_argv("peer"))
+    start(run, "vehicle", dune_argv("vehicle"))
+    received, end = 0, time.monotonic() + args.seconds
+    try:
+        while time.monotonic() < end:
+            try:
+                sink.recv(65536)
+                received += 1
+            except socket.timeout:
+                continue
+    except KeyboardInterrupt:
+        print("dune record: interrupted", file=sys.stderr)
+    finally:
+        for name in ("vehicle", "peer"):
+            stop(run, name)
+        gateway.shutdown()
+        sink.close()
+        _save_capture(capture, args.out)
+        for pid in leftovers():
+            os.kill(pid, signal.SIGKILL)
+    print(f"dune record: {received} datagrams from the vehicle in {args.seconds:g} s")
+    return 0 if received else 1

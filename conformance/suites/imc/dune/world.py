@@ -73,7 +73,7 @@ Enable Broadcast = false
 
 [Transports.UDP]
 Local Port = {port}
-Transports = {messages}
+{transports}
 {modem}
 [Simulators.Iridium]
 Enabled = Simulation
@@ -103,12 +103,16 @@ PEER_WITHOUT = ("Transports.UDP", "Transports.Announce", "Transports.Discovery",
                 "Transports.TCP.Server/SlaveCPU", "Transports.TCP.Server/BackSeat", "Transports.TCPOnDemand")
 
 
-def write_configs() -> Path:
-    """Write the configuration files into DUNE's etc/ (of the cache's sdist copy); the folder."""
+def write_configs(record_to: int | None = None) -> Path:
+    """Write the configuration files into DUNE's etc/ (of the cache's sdist copy); the folder. ``record_to``: a
+    loopback port the vehicle sends DUNE's own list of transported messages to (for a recording of its whole traffic)
+    instead of the scenarios' replies."""
     folder = source() / "etc" / CONFIG_DIR
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "shared.ini").write_text(SHARED)
-    (folder / "vehicle.ini").write_text(VEHICLE_INI.format(port=UDP_PORT, messages=", ".join(UDP_MESSAGES),
+    transports = (f"Transports = {', '.join(UDP_MESSAGES)}" if record_to is None
+                  else f"Static Destinations = 127.0.0.1:{record_to}")
+    (folder / "vehicle.ini").write_text(VEHICLE_INI.format(port=UDP_PORT, transports=transports,
                                                            modem=MODEM.format(seed=1), iridium=IRIDIUM_PORT))
     disabled = "".join(f"\n[{task}]\nEnabled = Never\n" for task in PEER_WITHOUT)
     (folder / "peer.ini").write_text(PEER_INI.format(disabled=disabled, modem=MODEM.format(seed=2)))
