@@ -9,7 +9,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test generate benchmark dune dune-conformance matrix mutants cpp-adapters
+.PHONY: conformance test generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -56,4 +56,10 @@ dune: $(VENV)/.installed
 
 dune-conformance: dune
 	$(VENV)/bin/python -m imc_conformance.suites.imc.dune conformance
+
+# DUNE's own traffic for a minute (every message lauv-simulator-1 transports), recorded in its namespace, then judged
+# message by message with the whole protocol. Never in CI.
+dune-record: dune
+	$(VENV)/bin/python -m imc_conformance.suites.imc.dune record --seconds 60 --out reports/dune-whole.pcap
+	$(VENV)/bin/imc-conformance pcap reports/dune-whole.pcap --suite imc-full --json reports/dune-whole.json --html reports/dune-whole.html
 

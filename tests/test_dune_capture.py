@@ -79,3 +79,25 @@ def test_the_passive_rules_name_who_did_not_answer(judged):
     assert [k["verdict"] for k in listed] == ["FAIL"] * 11 + ["INCONCLUSIVE"]
     assert all("no AcousticStatus from system 209 to 19517 within 20 s" in k["detail"] for k in listed[:11])
     assert "the capture ends" in listed[11]["detail"]
+
+
+WHOLE = Path(__file__).parent / "data" / "dune-whole.pcap"
+# python -m imc_conformance.suites.imc.dune record --seconds 60 --per-message 40: what DUNE (lauv-simulator-1, its
+# own list of transported messages) sent in a minute, at most 40 datagrams of each message
+WHOLE_FRAMES = {"EntityState": 40, "CpuUsage": 11, "SimulatedState": 30, "StorageUsage": 3, "LogBookEntry": 10,
+                "Heartbeat": 40, "Announce": 30, "Rpm": 40, "GpsFix": 40, "EulerAngles": 40, "AngularVelocity": 40,
+                "Acceleration": 40, "Distance": 20, "Temperature": 13, "Salinity": 40, "ServoPosition": 40,
+                "EstimatedState": 40, "AlignmentState": 23, "VehicleState": 40, "VehicleMedium": 40,
+                "PlanControlState": 40}
+
+
+def test_dunes_whole_traffic_is_judged_message_by_message_with_the_whole_protocol(tmp_path, capsys):
+    assert main(["pcap", str(WHOLE), "--json", str(tmp_path / "seed.json")]) == 0
+    assert "590 frames of 19 messages the suite does not cover" in capsys.readouterr().out
+    assert main(["pcap", str(WHOLE), "--suite", "imc-full", "--json", str(tmp_path / "whole.json")]) == 0
+    doc = json.loads((tmp_path / "whole.json").read_text())
+    assert {m["name"]: [(c["id"], c["verdict"]) for c in m["cases"]] for m in doc["messages"]} == {
+        name: [(f"imc/{name}/capture/frame/valid", "PASS")] for name in WHOLE_FRAMES}
+    counts = {m["name"]: m["cases"][0]["detail"].split(" frame")[0].removeprefix("count: ") for m in doc["messages"]}
+    assert counts == {name: str(n) for name, n in WHOLE_FRAMES.items()}
+    assert not any("does not cover" in note for note in doc["notes"])

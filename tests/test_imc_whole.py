@@ -134,6 +134,24 @@ def test_the_imcpy_shim_gets_the_library_adapters_verdict_on_every_case(imcpy_ca
     assert shim == {c.id: c.verdict.value for c in imcpy_cases}
 
 
+def test_dunes_cpp_codec_judged_over_the_whole_protocol_fails_only_erratum_i5(full, whole):
+    """DUNE's C++ codec without the binding (dune-cpp, built for the whole protocol's definitions): the binding's
+    errata (I3, I6) are gone, DUNE's own I5 stays."""
+    from imc_conformance.sessions.subprocess import SubprocessSession
+    from imc_conformance.suites.imc.dune import codec as dune_codec
+
+    program = dune_codec.program(definitions=full.packaged / "definitions.json")
+    session = SubprocessSession([str(program)], name="dune-cpp", encoding_param="byte_order", hello_timeout=30)
+    try:
+        result = run_cases(session, full, whole[1], edition=EDITION, adapter="dune-cpp")
+    finally:
+        session.close()
+    cases = [c for m in result.messages for c in m.cases]
+    assert {c.verdict for c in cases} == {Verdict.PASS, Verdict.IMPL_DEFINED, Verdict.FAIL}
+    assert {c.id for c in cases if c.verdict == Verdict.FAIL} == {
+        f"imc/FollowRefState/payload-cut/before-FollowRefState.reference.Reference.radius/{o}" for o in ("le", "be")}
+
+
 def test_pyimclsts_judged_over_the_whole_protocol_fails_only_where_an_erratum_says_why(whole):
     from imc_conformance.adapters.pyimclsts_adapter import adapter
 

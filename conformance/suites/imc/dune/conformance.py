@@ -200,16 +200,21 @@ def _capture():
     return sniffer
 
 
-def _save_capture(sniffer, path: Path) -> None:
+def _save_capture(sniffer, path: Path, per_message: int | None = None) -> None:
+    """Write what the sniffer saw (``per_message``: at most that many datagrams of each IMC message id)."""
     if sniffer is None:
         return
-    from scapy.all import wrpcap
+    from scapy.all import UDP, wrpcap
 
-    packets, previous = [], None
+    packets, previous, seen = [], None, {}
     for packet in sniffer.stop():  # a packet socket on loopback sees each packet twice, leaving and arriving
         data = bytes(packet)
         if data != previous:
-            packets.append(packet)
+            payload = bytes(packet[UDP].payload)
+            key = payload[2:4] if payload[:2] == b"\x54\xfe" else payload[3:1:-1]  # the message id, little-endian
+            seen[key] = seen.get(key, 0) + 1
+            if per_message is None or seen[key] <= per_message:
+                packets.append(packet)
         previous = None if data == previous else data
     wrpcap(str(path), packets)
     print(f"capture: {len(packets)} datagrams in {path}")
@@ -256,6 +261,8 @@ def record(argv: list[str]) -> int:
                                      description=record.__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=120.0, help="how long to record (default 120)")
     parser.add_argument("--out", type=Path, default=Path("reports/dune-whole.pcap"), help="the recording to write")
+    parser.add_argument("--per-message", type=int, metavar="N",
+                        help="keep at most N datagrams of each message (a small recording of every message sent)")
     args = parser.parse_args(argv)
     if not built():
         print("dune record: DUNE is not built here: run `make dune` first", file=sys.stderr)
@@ -298,7 +305,7 @@ def record(argv: list[str]) -> int:
             stop(run, name)
         gateway.shutdown()
         sink.close()
-        _save_capture(capture, args.out)
+        _save_capture(capture, args.out, args.per_message)
         for pid in leftovers():
             os.kill(pid, signal.SIGKILL)
     print(f"dune record: {received} datagrams from the vehicle in {args.seconds:g} s")
