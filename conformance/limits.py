@@ -11,4 +11,5 @@ TIME_SCALE_MAX = 1000.0  # the factor on a live run's time bounds (--time-scale)
 FILE_LIMIT = 256 << 20  # bytes of a JSON or text file the suite reads (claims, waivers, results, corpus files)
 PIPE_LIMIT = 1 << 30  # bytes of a capture read from a pipe or a device
 NESTING_LIMIT = 64  # inline messages within inline messages that a decoder follows (the corpus needs 4)
+XML_LIMIT = 16 << 20  # bytes of an IMC.xml (IMC.xml 5.4.30 is 0.6 MB)
 JSON_NESTING_LIMIT = 200  # arrays and objects within each other in JSON from outside (64 inline messages need ~130)

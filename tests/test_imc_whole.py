@@ -215,3 +215,47 @@ def test_pcap_judges_every_message_of_the_whole_protocol_frame_by_frame(full, tm
     assert verdicts["imc/EntityState/capture/frame/valid"][0] == "PASS"
     assert verdicts["imc/EstimatedState/capture/frame/crc"][0] == "FAIL"
     assert "does not cover" not in " ".join(doc["notes"])
+
+
+def test_a_copy_of_imc_xml_with_a_message_added_and_a_field_changed_gives_a_corpus_a_run_and_a_pcap_that_show_it(
+        full, tmp_path, capsys):
+    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
+
+    raw = fetch_imc_xml().read_text(encoding="utf-8")
+    start = raw.index('<message id="350"')
+    end = raw.index("</message>", start)
+    raw = raw[:start] + raw[start:end].replace('abbrev="height" type="fp32_t"', 'abbrev="height" type="uint8_t"') + \
+        raw[end:]
+    raw = raw.replace("</messages>", '<message id="4000" name="Conformance Probe" abbrev="ConformanceProbe">'
+                                     '<field name="Count" abbrev="count" type="uint16_t"/></message></messages>')
+    (tmp_path / "IMC.xml").write_text(raw, encoding="utf-8")
+    out = tmp_path / "lab"
+    assert main(["generate", "--from", str(tmp_path / "IMC.xml"), "--out", str(out)]) == 0
+    assert "cases for 339 messages" in capsys.readouterr().out
+    for path in (out / "cases").glob("*.json"):  # a user may keep only the messages to judge
+        if not path.name.endswith(("-EstimatedState.json", "-ConformanceProbe.json", "-Heartbeat.json")):
+            path.unlink()
+    lab, cases = open_corpus("imc", out)
+    assert lab.defs["EstimatedState"].field("height").type == "uint8_t" and lab.defs["ConformanceProbe"].id == 4000
+
+    # imcpy, built from the unchanged IMC.xml: Heartbeat passes, the changed and the added message fail
+    from imc_conformance.adapters.imcpy_adapter import ImcpyAdapter
+
+    result = run_cases(LibrarySession(ImcpyAdapter(), "imcpy"), lab, cases, edition=EDITION, adapter="imcpy")
+    assert {m.name: m.verdict for m in result.messages} == {
+        "Heartbeat": Verdict.PASS, "EstimatedState": Verdict.FAIL, "ConformanceProbe": Verdict.FAIL}
+
+    # frames made with the changed XML: valid by its definitions, not by IMC.xml's
+    header = {"timestamp": 1.0, "src": 30, "src_ent": 1, "dst": 0xFFFF, "dst_ent": 0xFF}
+    write_capture(tmp_path / "c.pcap", [
+        codec.encode(lab.defs, {"abbrev": "ConformanceProbe", "header": header, "fields": {"count": 7}}, "le"),
+        codec.encode(lab.defs, {"abbrev": "EstimatedState", "header": header,
+                                "fields": samples.filled_fields(lab.defs, lab.defs["EstimatedState"])}, "le")])
+    for args, verdicts in (
+            (["--vectors", str(out)], {"imc/ConformanceProbe/capture/frame/valid": "PASS",
+                                       "imc/EstimatedState/capture/frame/valid": "PASS"}),
+            (["--suite", "imc-full"], {"imc/EstimatedState/capture/frame/field-overrun": "FAIL"})):
+        main(["pcap", str(tmp_path / "c.pcap"), *args, "--json", str(tmp_path / "r.json")])
+        doc = json.loads((tmp_path / "r.json").read_text())
+        assert {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]} == verdicts, args
+    assert "id 4000 (1)" in " ".join(doc["notes"])

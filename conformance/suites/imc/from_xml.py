@@ -12,9 +12,9 @@ from __future__ import annotations
 import re
 import xml.etree.ElementTree as ET
 
+from ...limits import XML_LIMIT
 from .definitions import SCALAR_FORMATS
 
-XML_LIMIT = 16 << 20  # bytes: IMC.xml 5.4.30 is 0.6 MB
 HEADER = [("sync", "uint16_t"), ("mgid", "uint16_t"), ("size", "uint16_t"), ("timestamp", "fp64_t"),
           ("src", "uint16_t"), ("src_ent", "uint8_t"), ("dst", "uint16_t"), ("dst_ent", "uint8_t")]
 FOOTER = [("crc16", "uint16_t")]

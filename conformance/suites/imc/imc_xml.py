@@ -6,11 +6,7 @@ XML is extracted into the cache directory (``$IMC_CONFORMANCE_CACHE``, else ``~/
 
 from __future__ import annotations
 
-import subprocess
 import sys
-import tarfile
-import tempfile
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from ...cache import cache_dir
@@ -24,6 +20,9 @@ def imcpy_sdist(timeout: float = 300) -> Path:
     target = cache_dir() / f"imcpy-{IMCPY_VERSION}.tar.gz"
     if target.exists():
         return target
+    import subprocess
+    import tempfile
+
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [sys.executable, "-m", "pip", "download", "--no-deps", "--no-binary", ":all:",
                "--no-build-isolation", "--disable-pip-version-check", "-d", tmp, f"imcpy=={IMCPY_VERSION}"]
@@ -41,6 +40,8 @@ def fetch_imc_xml(timeout: float = 300) -> Path:
     target = cache_dir() / f"IMC-imcpy-{IMCPY_VERSION}.xml"
     if target.exists():
         return target
+    import tarfile
+
     sdist = imcpy_sdist(timeout)
     with tarfile.open(sdist) as tar:
         member = tar.extractfile(_MEMBER)
@@ -52,5 +53,8 @@ def fetch_imc_xml(timeout: float = 300) -> Path:
     return target
 
 
-def parse_imc_xml(path: Path) -> ET.Element:
+def parse_imc_xml(path: Path):
+    """The root element of an IMC.xml (ElementTree)."""
+    import xml.etree.ElementTree as ET
+
     return ET.parse(path).getroot()

@@ -11,18 +11,14 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import shutil
-import tempfile
 from functools import cache
 from pathlib import Path
 
 from ...inputs import read_bytes
+from ...limits import XML_LIMIT
 from ..data_suite import MANIFEST, manifest_entries
 from .definitions import Definitions, load_definitions, parse_definitions
-from .from_xml import XML_LIMIT, XmlError, definitions_from_xml
 from .paths import IMC
-
 
 
 def generator_sources() -> list[bytes]:
@@ -34,18 +30,18 @@ def generator_sources() -> list[bytes]:
 
 def xml_document(raw: bytes) -> dict:
     """The definitions document of an IMC.xml's bytes, with the packaged definitions' wire facts."""
+    from .from_xml import definitions_from_xml
+
     packaged = load_definitions().raw
     return definitions_from_xml(raw, packaged["frame"], packaged["types"])
 
 
 @cache
-def imc_xml_definitions(path: Path | None = None) -> Definitions:
-    """Every message of an IMC.xml (default: the one imcpy ships, fetched once into the cache) as definitions."""
-    if path is None:
-        from .imc_xml import fetch_imc_xml
+def imc_xml_definitions() -> Definitions:
+    """Every message of the IMC.xml imcpy ships (fetched once into the cache) as definitions."""
+    from .imc_xml import fetch_imc_xml
 
-        path = fetch_imc_xml()
-    return parse_definitions(xml_document(read_bytes(path, XML_LIMIT)))
+    return parse_definitions(xml_document(read_bytes(fetch_imc_xml(), XML_LIMIT)))
 
 
 def merged_document(seed: dict, xml: dict) -> dict:
@@ -107,6 +103,10 @@ def whole_folder() -> Path:
     target = cache_dir() / f"imc-whole-{key}"
     if (target / MANIFEST).exists():
         return target
+    import os
+    import shutil
+    import tempfile
+
     files = whole_files(IMC, xml_raw)
     partial = Path(tempfile.mkdtemp(prefix=target.name + ".", dir=target.parent))
     try:

@@ -16,9 +16,10 @@ from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown,
 from ....fuzz import promote
 from ....fuzz.promote import promoted_cases
 from ....inputs import read_bytes
+from ....limits import XML_LIMIT
 from ..definitions import Definitions, lint_definitions, load_definitions, parse_definitions
-from ..from_xml import XML_LIMIT, definitions_from_xml
 from ..fuzzing import ImcFuzzSource
+from ..whole import xml_document
 from ... import load_suite
 from ...data_suite import write_generated
 from ..paths import imc_data
@@ -85,8 +86,7 @@ def message_files(defs: Definitions, examples: dict[str, list[dict]] | None = No
 def folder_from_xml(source: Path, out: Path) -> int:
     """Write a suite folder for the IMC.xml at ``source`` into ``out``: its definitions.json, a case file for every
     message and the coverage table (``run --vectors out`` runs it); ValueError for an XML the suite cannot read."""
-    packaged = load_definitions().raw  # its frame and types: the wire facts an IMC.xml leaves out
-    doc = definitions_from_xml(read_bytes(source, XML_LIMIT), packaged["frame"], packaged["types"])
+    doc = xml_document(read_bytes(source, XML_LIMIT))
     defs = parse_definitions(doc)
     doc.pop("$schema")
     files = {"definitions.json": json.dumps(doc, indent=1, ensure_ascii=True) + "\n"} | message_files(defs, schema=None)
