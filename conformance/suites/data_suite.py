@@ -120,19 +120,12 @@ class DataSuite(Suite):
                              wire.knows, wire.fields_of, {s["id"]: s for s in self.statements}, params)
 
     def profile(self, name: str) -> dict:
-        """A profile of the folder, else of the packaged data, checked against its schema."""
-        from ..files import read_json, schema_error
-        from ..paths import VECTORS
-
+        """A profile of the folder, else of the packaged data (``read_data_file``: checked against its schema unless
+        the manifest vouches for it)."""
         known = sorted({p.stem for folder in (self.folder, self.packaged) for p in (folder / "profiles").glob("*.json")})
         if name not in known:
             raise ValueError(f"unknown profile {name!r} of the suite {self.name!r} (profiles: {', '.join(known) or 'none'})")
-        path = self.data(f"profiles/{name}.json")
-        _, doc = read_json(path)
-        problem = schema_error(VECTORS / "schema" / "profile.schema.json", doc, str(path))
-        if problem:
-            raise ValueError(problem)
-        return doc
+        return read_data_file(self.data(f"profiles/{name}.json"), "profile.schema.json", self.packaged)
 
     @cached_property
     def errata(self) -> list[dict]:
