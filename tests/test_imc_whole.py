@@ -4,8 +4,10 @@ message by message, and the scapy layer over all of it."""
 
 from __future__ import annotations
 
-import copy
 import json
+import os
+import subprocess
+import sys
 from collections import Counter
 
 import orjson
@@ -259,3 +261,21 @@ def test_a_copy_of_imc_xml_with_a_message_added_and_a_field_changed_gives_a_corp
         doc = json.loads((tmp_path / "r.json").read_text())
         assert {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]} == verdicts, args
     assert "id 4000 (1)" in " ".join(doc["notes"])
+
+
+@pytest.mark.parametrize("change,says", [
+    (lambda raw: raw.replace('abbrev="Heartbeat"', 'abbrev="Heartbeats"', 1), "id 150 is the seeds' Heartbeat"),
+    (lambda raw: raw.replace('version="5.4.30"', 'version="five"', 1), "not an IMC version"),
+    (lambda raw: raw[:1000], "not XML"),
+])
+def test_a_damaged_cached_imc_xml_is_a_one_line_error(tmp_path, change, says):
+    """The IMC.xml in the cache is a file anyone could have changed: a suite it cannot build says why in one line."""
+    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
+
+    xml = fetch_imc_xml()
+    (tmp_path / xml.name).write_text(change(xml.read_text(encoding="utf-8")), encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "imc_conformance.cli", "list", "--suite", "imc-full"],
+                          capture_output=True, text=True, timeout=120, cwd=tmp_path,
+                          env={**os.environ, "IMC_CONFORMANCE_CACHE": str(tmp_path)})
+    assert done.returncode == 2 and says in done.stderr, done.stderr
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import dataclass, field
 from functools import cache, cached_property
 from pathlib import Path
@@ -65,6 +66,16 @@ class FieldDef:
         if self.type.startswith("u"):
             return 0, (1 << bits) - 1
         return -(1 << (bits - 1)), (1 << (bits - 1)) - 1
+
+    @cached_property
+    def int_range(self) -> tuple[int, int]:
+        """The integers an integer field may hold: its type's, narrowed by its min and max."""
+        lo, hi = self.int_bounds
+        if self.minimum is not None:
+            lo = max(lo, math.ceil(self.minimum))
+        if self.maximum is not None:
+            hi = min(hi, math.floor(self.maximum))
+        return lo, hi
 
 
 @dataclass(frozen=True)
@@ -181,7 +192,7 @@ def lint_definitions(defs: Definitions) -> list[str]:
                         f"{m.abbrev}.{f.abbrev}: {v.abbrev} = {v.value} does not fit {f.type} "
                         f"[{lo}, {hi}] (editions: {editions})"
                     )
-                elif (f.minimum is not None and v.value < f.minimum) or (f.maximum is not None and v.value > f.maximum):
+                elif not f.int_range[0] <= v.value <= f.int_range[1]:
                     problems.append(f"{m.abbrev}.{f.abbrev}: {v.abbrev} = {v.value} is outside the field's min/max "
                                     f"[{f.minimum}, {f.maximum}]: its cases are acceptable")
             for t in f.message_types:

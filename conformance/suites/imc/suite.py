@@ -93,9 +93,8 @@ class ImcSuite(DataSuite):
                                     help="imcpy, DUNE's C++ codec (library)"),
             "pyimclsts": BuiltinAdapter("pyimclsts", library=f"{ADAPTERS_PACKAGE}.pyimclsts_adapter:adapter",
                                         help="pyimclsts (library)"),
-            "imcpy-shim": BuiltinAdapter("imcpy-shim", argv=lambda: shim_argv("imcpy_shim.py") + (
-                [] if self.packaged == IMC else ["--definitions", str(self.packaged / "definitions.json")]),
-                help="imcpy through the subprocess protocol"),
+            "imcpy-shim": BuiltinAdapter("imcpy-shim", argv=lambda: shim_argv("imcpy_shim.py") + [
+                "--definitions", str(self.packaged / "definitions.json")], help="imcpy through the subprocess protocol"),
             "pyimclsts-shim": BuiltinAdapter("pyimclsts-shim", argv=pyimclsts_shim_argv,
                                              help="pyimclsts through the subprocess protocol"),
             "dune-cpp": BuiltinAdapter("dune-cpp", argv=lambda: dune_cpp_argv(self.packaged / "definitions.json"),
@@ -106,7 +105,8 @@ class ImcSuite(DataSuite):
         return VECTORS / "schema" / {"scenario": "scenarios.schema.json", "robustness": "robustness.schema.json"}.get(
             kind, "vectors.schema.json")
 
-    def group_of(self, doc: dict) -> str:
+    @staticmethod
+    def group_of(doc: dict) -> str:
         return doc["message"]["abbrev"]
 
     def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:

@@ -47,6 +47,8 @@ def imc_xml_definitions() -> Definitions:
 def merged_document(seed: dict, xml: dict) -> dict:
     """The seed definitions with every message of the XML they lack; the seeds' auxiliary messages become suite
     messages. XmlError where the XML gives a seed message's id another name."""
+    from .from_xml import XmlError
+
     by_id = {m["id"]: m for m in xml["messages"]}
     messages = []
     for m in seed["messages"]:
@@ -62,16 +64,6 @@ def merged_document(seed: dict, xml: dict) -> dict:
             "frame": frame, "messages": sorted(messages, key=lambda m: m["id"])}
 
 
-def only_in_edition(text: str, edition: str) -> str:
-    """A generated case file whose cases hold only under ``edition``."""
-    doc = json.loads(text)
-    doc["editions"] = [edition]
-    for case in doc["cases"]:
-        expect = case["expect"]
-        case["expect"] = {edition: expect} if isinstance(expect, str) else {edition: expect[edition]}
-    return json.dumps(doc, indent=1, ensure_ascii=True) + "\n"
-
-
 def whole_files(seed_folder: Path, xml_raw: bytes) -> dict[str, bytes]:
     """Every file of the whole-protocol folder (relative path -> bytes), but its manifest."""
     from .corpus.build import message_files
@@ -82,13 +74,13 @@ def whole_files(seed_folder: Path, xml_raw: bytes) -> dict[str, bytes]:
     merged = merged_document(seed_doc, xml)
     seed_ids = {m["id"] for m in seed_doc["messages"] if not m.get("auxiliary")}
     generated = message_files(parse_definitions(xml), schema=None,
-                              only=frozenset(m["abbrev"] for m in xml["messages"] if m["id"] not in seed_ids))
+                              only=frozenset(m["abbrev"] for m in xml["messages"] if m["id"] not in seed_ids),
+                              only_edition=edition)
     files = {p.relative_to(seed_folder).as_posix(): p.read_bytes() for p in sorted(seed_folder.rglob("*"))
              if p.is_file() and p.name not in (MANIFEST, "definitions.json")}
     files["definitions.json"] = (json.dumps(merged, indent=1, ensure_ascii=True) + "\n").encode()
     files["coverage-generated.md"] = generated.pop("coverage.md").encode()
-    for name, text in generated.items():
-        files[name] = only_in_edition(text, edition).encode()
+    files.update((name, text.encode()) for name, text in generated.items())
     return files
 
 
@@ -115,7 +107,7 @@ def whole_folder() -> Path:
             (partial / name).write_bytes(data)
         from .suite import ImcSuite
 
-        entries = manifest_entries(files, ImcSuite.case_folders, lambda doc: doc["message"]["abbrev"])
+        entries = manifest_entries(files, ImcSuite.case_folders, ImcSuite.group_of)
         (partial / MANIFEST).write_text(json.dumps({"format": 1, "description": "Written by imc-conformance for the "
                                                     "whole protocol: the SHA-256 of every JSON file as built.",
                                                     "files": entries}, indent=1) + "\n", encoding="utf-8")

@@ -74,7 +74,7 @@ def field_cases(mc: MessageCases, f: FieldDef):
                    {"comment": "A bit the table does not define; DUNE and imcpy carry it unchanged."})
     elif f.is_int and (f.minimum is not None or f.maximum is not None):
         lo, hi = f.int_bounds
-        rlo, rhi = samples.int_range(f)
+        rlo, rhi = f.int_range
         seen = set()
         for name, value in (("below-min", rlo - 1), ("type-min", lo), ("above-max", rhi + 1), ("type-max", hi)):
             if value in seen or not lo <= value <= hi or rlo <= value <= rhi:

@@ -54,10 +54,11 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
 
 def message_files(defs: Definitions, examples: dict[str, list[dict]] | None = None,
                   promoted: dict[str, list[dict]] | None = None, schema: str | None = "../../schema",
-                  only: frozenset[str] | None = None) -> dict[str, str]:
+                  only: frozenset[str] | None = None, only_edition: str | None = None) -> dict[str, str]:
     """The case file of every message the definitions cover (``only``: of these messages) and the coverage table
     (``examples``: realistic messages, ``promoted``: kept fuzz findings, by message; ``schema``: the schema folder
-    relative to cases/, for editors, None where there is none)."""
+    relative to cases/, for editors, None where there is none; ``only_edition``: every case holds under that edition
+    alone, as where the files join a suite of more editions)."""
     files: dict[str, str] = {}
     per_message = {}
     for mdef in defs.suite_messages:
@@ -68,13 +69,17 @@ def message_files(defs: Definitions, examples: dict[str, list[dict]] | None = No
         add_acceptable(mc)
         add_invalid(mc)
         mc.extend((promoted or {}).get(mdef.abbrev, []))
+        if only_edition is not None:
+            for case in mc.cases:
+                expect = case["expect"]
+                case["expect"] = {only_edition: expect if isinstance(expect, str) else expect[only_edition]}
         doc = {
             **({"$schema": f"{schema}/vectors.schema.json"} if schema else {}),
             "format": FORMAT_VERSION,
             "suite": "imc",
             "message": {"abbrev": mdef.abbrev, "id": mdef.id, "name": mdef.name, "clause": mdef.clause,
                         "definition": mdef.hash},
-            "editions": list(defs.editions),
+            "editions": [only_edition] if only_edition else list(defs.editions),
             "cases": mc.cases,
         }
         per_message[mdef.abbrev] = mc.cases

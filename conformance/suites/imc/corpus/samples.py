@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import copy
-import math
 import struct
 
 from ..definitions import Definitions, FieldDef, MessageDef
@@ -23,7 +22,7 @@ def default_value(f: FieldDef):
             return 0.0
         return bound_inside(f, f.minimum, +1) if f.minimum is not None and f.minimum > 0 else bound_inside(f, f.maximum, -1)
     if f.is_int:
-        lo, hi = int_range(f)
+        lo, hi = f.int_range
         return min(max(0, lo), hi)
     return {"plaintext": "", "rawdata": "", "message": None, "message-list": []}[f.type]
 
@@ -56,11 +55,11 @@ def filled_value(defs: Definitions, f: FieldDef, depth: int = 1):
         values = common_enum_values(defs, f)
         return next((v for v in values if v != 0), values[0])
     if f.is_int:
-        lo, hi = int_range(f)
+        lo, hi = f.int_range
         return min(max(FILLED_INTS[f.type], lo), hi)
     if f.is_float:
         if f.minimum is not None or f.maximum is not None:
-            return next((x for x in (0.5, -0.5, 0.0) if in_float_range(f, x)), f.minimum if f.minimum is not None else f.maximum)
+            return next((x for x in (0.5, -0.5) if in_float_range(f, x)), default_value(f))
         return 1.5 if f.type == "fp32_t" else 0.25
     if f.type == "plaintext":
         return "imc"
@@ -71,16 +70,6 @@ def filled_value(defs: Definitions, f: FieldDef, depth: int = 1):
     if f.type == "message":
         return element
     return [element] if element is not None else []
-
-
-def int_range(f: FieldDef) -> tuple[int, int]:
-    """The integers an integer field may hold: its type's, narrowed by the definition's min and max."""
-    lo, hi = f.int_bounds
-    if f.minimum is not None:
-        lo = max(lo, math.ceil(f.minimum))
-    if f.maximum is not None:
-        hi = min(hi, math.floor(f.maximum))
-    return lo, hi
 
 
 def at_width(f: FieldDef, x: float) -> float:

@@ -61,11 +61,11 @@ def field_variants(mc: MessageCases, f: FieldDef):
     """(path, value, clause, tags, expect) for each valid variant of one field."""
     defs = mc.defs
     if f.enum_kind == "enum":
+        lo, hi = f.int_bounds
+        rlo, rhi = f.int_range
         for v in f.enum_values:
-            lo, hi = f.int_bounds
             if not lo <= v.value <= hi:
                 continue  # cannot fit the field type: an acceptable encode case (see acceptable.py)
-            rlo, rhi = samples.int_range(f)
             expect = ("valid" if v.editions is None else
                       {e: ("valid" if e in v.editions else "acceptable") for e in defs.editions})
             tags = ["enum", f"value:{v.abbrev}"] + ([] if v.editions is None else ["edition-specific"])
@@ -82,7 +82,7 @@ def field_variants(mc: MessageCases, f: FieldDef):
         return
     if f.is_int:
         lo, hi = f.int_bounds
-        rlo, rhi = samples.int_range(f)
+        rlo, rhi = f.int_range
         classes = {"min": lo, "max": hi, "zero": 0, "one": 1}
         if lo < 0:
             classes["minus-one"] = -1

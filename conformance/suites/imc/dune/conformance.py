@@ -23,6 +23,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from .build import built, home
@@ -87,6 +88,41 @@ def _run(args) -> int:
     if problem:
         print(f"make dune-conformance: {problem}", file=sys.stderr)
         return 2
+    args.reports.mkdir(parents=True, exist_ok=True)
+    began = time.monotonic()
+    codes = {}
+    with _world(args.reports / "dune-exchange.pcap") as run:
+        (run / "claims.json").write_text(json.dumps(CLAIMS))
+        try:
+            for i, profile in enumerate(() if args.fuzz_only else PROFILES):
+                if i:
+                    _restart_both(run)
+                codes[profile] = _suite(args, run, profile)
+                if codes[profile] == 130:  # the run was interrupted (Ctrl-C, SIGTERM): so is the whole job
+                    raise KeyboardInterrupt
+            if args.fuzz_budget:
+                if codes:
+                    _restart_both(run)
+                time.sleep(ACOUSTIC_WARMUP)  # the probes' baseline needs the acoustic service up, which DUNE starts late
+                codes["fuzz"] = _fuzz(args, run)
+                if codes["fuzz"] == 130:
+                    raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            print("make dune-conformance: interrupted", file=sys.stderr)
+            return 130
+    wall = time.monotonic() - began
+    print(f"wall time: {wall:.0f} s; exit codes: " + ", ".join(f"{p} {c}" for p, c in codes.items()))
+    (args.reports / "dune-run.json").write_text(json.dumps({"wall_seconds": round(wall), "exit_codes": codes}) + "\n")
+    if any(code not in (0, 1) for code in codes.values()):
+        return 2  # a run that could not judge DUNE (usage, adapter, nothing tested)
+    return 0 if args.fuzz_only else _expectations(args)
+
+
+@contextmanager
+def _world(capture_to: Path, record_to: int | None = None, per_message: int | None = None):
+    """The vehicle, its peer and the Iridium gateway started (``write_configs(record_to)``), their state forgotten,
+    with the IMC ports of loopback captured; the run folder. On the way out everything is stopped, the capture
+    written to ``capture_to`` (``per_message``: see ``_save_capture``) and any DUNE process left over killed."""
     stale = leftovers()
     for pid in stale:
         os.kill(pid, signal.SIGKILL)
@@ -95,49 +131,23 @@ def _run(args) -> int:
     run = home() / "run"
     shutil.rmtree(run, ignore_errors=True)
     run.mkdir(parents=True)
-    args.reports.mkdir(parents=True, exist_ok=True)
-    write_configs()
+    write_configs(record_to)
     for system in (VEHICLE, PEER):
         forget_state(system)
-    (run / "claims.json").write_text(json.dumps(CLAIMS))
-    began = time.monotonic()
-    gateway = iridium_gateway()
-    capture = _capture()
+    gateway, capture = iridium_gateway(), _capture()
     start(run, "peer", dune_argv("peer"))
     start(run, "vehicle", dune_argv("vehicle"))
-    codes = {}
     try:
-        for i, profile in enumerate(() if args.fuzz_only else PROFILES):
-            if i:
-                _restart_both(run)
-            codes[profile] = _suite(args, run, profile)
-            if codes[profile] == 130:  # the run was interrupted (Ctrl-C, SIGTERM): so is the whole job
-                raise KeyboardInterrupt
-        if args.fuzz_budget:
-            if codes:
-                _restart_both(run)
-            time.sleep(ACOUSTIC_WARMUP)  # the probes' baseline needs the acoustic service up, which DUNE starts late
-            codes["fuzz"] = _fuzz(args, run)
-            if codes["fuzz"] == 130:
-                raise KeyboardInterrupt
-    except KeyboardInterrupt:
-        print("make dune-conformance: interrupted", file=sys.stderr)
-        return 130
+        yield run
     finally:
         for name in ("vehicle", "peer"):
             stop(run, name)
         gateway.shutdown()
-        _save_capture(capture, args.reports / "dune-exchange.pcap")
+        _save_capture(capture, capture_to, per_message)
         left = leftovers()
         for pid in left:
             os.kill(pid, signal.SIGKILL)
         print(f"stopped: the vehicle, its peer and the gateway; {'no DUNE process left' if not left else f'killed {len(left)} left over'}")
-    wall = time.monotonic() - began
-    print(f"wall time: {wall:.0f} s; exit codes: " + ", ".join(f"{p} {c}" for p, c in codes.items()))
-    (args.reports / "dune-run.json").write_text(json.dumps({"wall_seconds": round(wall), "exit_codes": codes}) + "\n")
-    if any(code not in (0, 1) for code in codes.values()):
-        return 2  # a run that could not judge DUNE (usage, adapter, nothing tested)
-    return 0 if args.fuzz_only else _expectations(args)
 
 
 def _isolate() -> str | None:
@@ -275,38 +285,23 @@ def record(argv: list[str]) -> int:
     if problem:
         print(f"dune record: {problem}", file=sys.stderr)
         return 2
-    for pid in leftovers():
-        os.kill(pid, signal.SIGKILL)
-    run = home() / "run"
-    shutil.rmtree(run, ignore_errors=True)
-    run.mkdir(parents=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_configs(record_to=RECORD_PORT)
-    for system in (VEHICLE, PEER):
-        forget_state(system)
-    gateway, capture = iridium_gateway(), _capture()
     sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sink.bind(("127.0.0.1", RECORD_PORT))
     sink.settimeout(0.5)
-    start(run, "peer", dune_argv("peer"))
-    start(run, "vehicle", dune_argv("vehicle"))
-    received, end = 0, time.monotonic() + args.seconds
+    received = 0
     try:
-        while time.monotonic() < end:
-            try:
-                sink.recv(65536)
-                received += 1
-            except socket.timeout:
-                continue
+        with _world(args.out, record_to=RECORD_PORT, per_message=args.per_message):
+            end = time.monotonic() + args.seconds
+            while time.monotonic() < end:
+                try:
+                    sink.recv(65536)
+                    received += 1
+                except socket.timeout:
+                    continue
     except KeyboardInterrupt:
         print("dune record: interrupted", file=sys.stderr)
     finally:
-        for name in ("vehicle", "peer"):
-            stop(run, name)
-        gateway.shutdown()
         sink.close()
-        _save_capture(capture, args.out, args.per_message)
-        for pid in leftovers():
-            os.kill(pid, signal.SIGKILL)
     print(f"dune record: {received} datagrams from the vehicle in {args.seconds:g} s")
     return 0 if received else 1
