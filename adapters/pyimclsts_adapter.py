@@ -32,7 +32,8 @@ Quirks observed (each pinned in tests/test_pyimclsts_adapter.py):
 - Assignment enforces enum membership (``ValueError: 7 is not a valid LblConfig.OP``) and the XML's
   min/max, on encode and, since ``unpack`` assigns too, on decode. Bitfields are ``IntFlag`` and take any
   value, a negative one silently becoming the set of known flags (-1 -> 3 for AnnounceService).
-  Integer ranges are checked only by ``struct`` in ``pack``; ``bool`` passes as ``int``.
+  Integer ranges are checked only by ``struct`` in ``pack``, a refusal the adapter names no rule for (the same
+  error stands for a value out of its type and for a length or count over 65535); ``bool`` passes as ``int``.
 - A message-list element cannot be null: assigning ``None`` in a list raises ``ValueError``; decoding a
   null id (65535) in a list raises ``KeyError``. A null inline message is the unassigned field.
 - An inline message field left out of ``fields`` packs as null (no missing-field refusal).
@@ -70,7 +71,6 @@ VERSION = importlib.metadata.version("pyimclsts")
 _MARKER = "generation.json"
 _FLOATS = {"fp32_t": (4, struct.Struct("<f"), struct.Struct("<I")),
            "fp64_t": (8, struct.Struct("<d"), struct.Struct("<Q"))}
-_INT_RANGE = re.compile(r"format requires|out of range|too large to convert")
 
 
 # ---------------------------------------------------------------- generation and import
@@ -255,10 +255,9 @@ class PyimclstsAdapter:
                                         header["src_ent"], header["dst"], header["dst_ent"])
         try:
             return obj.pack(is_big_endian=byte_order == "be")
-        except Exception as exc:
-            int_range = isinstance(exc, struct.error) and _INT_RANGE.search(str(exc))
-            raise Rejected(f"{abbrev}: pack: {type(exc).__name__}: {exc}",
-                           "value-out-of-type" if int_range else None) from exc
+        except Exception as exc:  # the field values were checked as they were set: a length, count or size that
+            # pyimclsts cannot pack is no check of its own, so no rule is named
+            raise Rejected(f"{abbrev}: pack: {type(exc).__name__}: {exc}") from exc
 
     def _build(self, abbrev, fields: dict, where: str):
         """A pyimclsts message object with ``fields`` assigned through its attributes."""

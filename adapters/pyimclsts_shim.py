@@ -17,7 +17,7 @@ names and types come from ``vectors/imc/definitions.json`` (or ``--definitions``
 through pyimclsts's attributes (which check types, enums and ranges) and read from its ``_<field>``
 slots (the attributes deep-copy message values, which fails); ``{"hex"}`` plaintext travels as
 surrogate-escaped ASCII as pyimclsts does; decode errors naming a CRC or the sync are ``crc``/``sync``,
-``struct`` range errors on pack are ``value-out-of-type``. Floats are answered at their width, with
+``struct`` errors on pack name no rule (pyimclsts packs values, lengths and counts without a check of its own). Floats are answered at their width, with
 ``nan``/``inf``/``-inf``, ``-0.0`` and NaN payloads kept.
 """
 
@@ -29,7 +29,6 @@ import json
 import os
 import re
 import shutil
-import struct
 import subprocess
 import sys
 import tempfile
@@ -42,7 +41,6 @@ PACKAGE = "pyimc_generated"  # fixed by pyimclsts.extract and pyimclsts.network
 VERSION = importlib.metadata.version("pyimclsts")
 MARKER = "generation.json"
 WIDTH = {"fp32_t": 4, "fp64_t": 8}
-INT_RANGE = re.compile(r"format requires|out of range|too large to convert")
 
 
 
@@ -192,10 +190,9 @@ class PyimclstsShim:
                                        header["src_ent"], header["dst"], header["dst_ent"])
         try:
             return obj.pack(is_big_endian=byte_order == "be")
-        except Exception as exc:
-            int_range = isinstance(exc, struct.error) and INT_RANGE.search(str(exc))
-            raise Refused(f"{abbrev}: pack: {type(exc).__name__}: {exc}",
-                          "value-out-of-type" if int_range else None) from exc
+        except Exception as exc:  # the field values were checked as they were set: a length, count or size that
+            # pyimclsts cannot pack is no check of its own, so no rule is named
+            raise Refused(f"{abbrev}: pack: {type(exc).__name__}: {exc}") from exc
 
     def build(self, abbrev, fields: dict, where: str):
         """A pyimclsts message object with ``fields`` assigned through its attributes."""

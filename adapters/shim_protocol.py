@@ -59,6 +59,9 @@ def float_value(x: float, width: int):
     return x
 
 
+MAX_ANSWER_LINE = 1_000_000  # the longest answer line the suite reads (adapters/README.md)
+
+
 def perform(shim, request: dict) -> dict:
     op = request.get("op")
     if op == "hello":
@@ -78,7 +81,10 @@ def respond(shim, line: bytes) -> str:
     except ValueError as exc:
         return json.dumps({"id": None, "ok": False, "internal": True, "error": f"not JSON: {exc}"})
     if isinstance(request, list):
-        return "[" + ",".join(answer(shim, r) for r in request) + "]"
+        answers = [answer(shim, r) for r in request]
+        if sum(len(a) + 1 for a in answers) + 2 > MAX_ANSWER_LINE:  # the contract's bound: one answer per line then
+            return "\n".join(answers)
+        return "[" + ",".join(answers) + "]"
     return answer(shim, request)
 
 

@@ -421,14 +421,14 @@ def test_damaged_pcapng_blocks_are_errors_not_tracebacks():
 @pytest.mark.parametrize("adapter, verdicts_", [
     ("imcpy", {"PASS"}),
     ("Reference", {"PASS"}),
-    ("NoCrcCheck", {"PASS", "FAIL"}),  # a mutant that accepts the frames whose CRC is wrong
+    ("CrcUnchecked", {"PASS", "FAIL"}),  # a mutant that accepts the frames whose CRC is wrong
 ])
 def test_captured_frames_replayed_through_an_implementation(adapter, verdicts_, tmp_path, capsys):
     if adapter != "imcpy":  # a mutant of suites/imc/mutants.py, made over the definitions
         (tmp_path / "mutant.py").write_text(
             f"import sys\nsys.path.insert(0, {str(__import__('pathlib').Path(__file__).parent)!r})\n"
             f"from imc_conformance.suites.imc.mutants import {adapter}\nfrom imc_conformance.suites import load_suite\n"
-            f"adapter = {adapter}(load_suite('imc').defs)\n")
+            f"adapter = {adapter}(load_suite('imc').defs)\n")  # a mutant class named in mutants.py
         adapter = f"{tmp_path / 'mutant.py'}:adapter"
     write_capture(tmp_path / "c.pcap", DEFS, SUITE.wire, EDITION, 600, damaged=0.1)
     code, out = run(tmp_path / "c.pcap", "--adapter", adapter, "--list-frames", "3", "--json", tmp_path / "r.json",

@@ -91,12 +91,41 @@ def test_errors_carry_rule_and_offset():
         assert (err.value.rule, err.value.offset) == (rule, offset)
 
 
-def test_encoder_refuses_a_payload_over_65513_bytes():
+def test_encoder_writes_any_payload_a_u16_size_carries_and_holds_dunes_cap_only_when_asked():
+    """65,535 payload bytes is what the size field carries (a 65,557-byte frame); DUNE's 65,535-byte frame cap is a
+    rule of practice (size-limit), held only when asked; a longer text has no u16 length (payload-overflow)."""
     ok = {"abbrev": "TextMessage", "header": {}, "fields": {"origin": "", "text": "x" * 65509}}
     assert len(codec.encode(DEFS, ok, "le")) == 65535
+    over_cap = dict(ok, fields={"origin": "", "text": "x" * 65510})
+    assert len(codec.encode(DEFS, over_cap, "le")) == 65536
     with pytest.raises(codec.EncodeError) as err:
-        codec.encode(DEFS, dict(ok, fields={"origin": "", "text": "x" * 65510}), "le")
+        codec.encode(DEFS, over_cap, "le", held=frozenset({"size-limit"}))
     assert err.value.rule == "size-limit"
+    largest = dict(ok, fields={"origin": "", "text": "x" * 65531})  # 2 + 2 + 65,531 = 65,535 payload bytes
+    assert len(codec.encode(DEFS, largest, "le")) == 65557
+    for fields in ({"origin": "", "text": "x" * 65532}, {"origin": "", "text": "x" * 65536}):
+        with pytest.raises(codec.EncodeError) as err:
+            codec.encode(DEFS, dict(ok, fields=fields), "le")
+        assert err.value.rule == "payload-overflow"
+
+
+def test_every_rule_switched_off_is_what_a_reader_without_it_does():
+    """The codec's switches (the oracle's and the per-rule mutants'): a frame cut short is refused for
+    size-exceeds-data, then, with that off, for its CRC, and with both off it decodes with its missing field empty."""
+    frame = codec.encode(DEFS, {"abbrev": "LblRange", "header": {}, "fields": {"id": 2, "range": 152.25}}, "le")
+    cut = frame[:23]  # header, id, and two bytes of range, which the CRC check then takes for the footer
+    refusals = []
+    off = frozenset()
+    while True:
+        try:
+            decoded = codec.decode(DEFS, cut, off=off)
+            break
+        except codec.FrameError as exc:
+            refusals.append(exc.rule)
+            off |= {exc.rule}
+    assert refusals == ["size-exceeds-data", "crc", "field-overrun"]
+    assert decoded["fields"] == {"id": 2, "range": 0.0}
+    assert set(codec.LENIENT) >= set(refusals)
 
 
 def test_encoder_refuses_values_outside_the_field_type():

@@ -30,12 +30,15 @@ def unexplained(suite, verdicts, implementation):
             if v not in PASSING and not suite.implementation_errata(cid, implementation)}
 
 
-def stale_globs(suite, verdicts, implementation):
-    """Errata globs naming cases judged here of which none fails (globs naming only cases of the whole protocol are
-    checked by test_imc_whole.py)."""
-    failing = [cid for cid, (v, _) in verdicts.items() if v not in PASSING]
+def stale_globs(suite, verdicts, implementation, records=()):
+    """Errata globs naming cases judged here of which none shows the erratum: none fails, and none of the acceptable
+    ones got another outcome than the reference implementations' (an erratum about a permitted choice, I3's lossy
+    text, shows that way). Globs naming only cases of the whole protocol are checked by test_imc_whole.py."""
+    reference = {c["id"]: c.get("reference") for c in records}
+    shown = [cid for cid, (v, results) in verdicts.items() if v not in PASSING or any(
+        r.outcome is not None and r.outcome != reference.get(cid) for r in results)]
     return [(e["id"], g) for e in suite.errata if implementation in erratum_keys(e.get("implementation"))
-            for g in e.get("cases", ()) if fnmatch.filter(verdicts, g) and not fnmatch.filter(failing, g)]
+            for g in e.get("cases", ()) if fnmatch.filter(verdicts, g) and not fnmatch.filter(shown, g)]
 
 
 @pytest.fixture(scope="module")
@@ -50,8 +53,8 @@ def test_imcpy_agrees_with_every_vector_but_documented_errata(suite, imcpy_verdi
     assert counts[Verdict.PASS] > 3000 and counts[Verdict.ADAPTER_ERROR] == 0
 
 
-def test_imcpy_errata_are_still_observed(suite, imcpy_verdicts):
-    assert stale_globs(suite, imcpy_verdicts, "imcpy") == []
+def test_imcpy_errata_are_still_observed(suite, imcpy_verdicts, records):
+    assert stale_globs(suite, imcpy_verdicts, "imcpy", records) == []
 
 
 def test_every_valid_le_frame_is_imcpys_serialization(imcpy_verdicts, records):
@@ -59,8 +62,8 @@ def test_every_valid_le_frame_is_imcpys_serialization(imcpy_verdicts, records):
     assert len(valid) > 900
     for case in valid:
         results = {r.check: r for r in imcpy_verdicts[case["id"]][1]}
-        assert results["encode-le"].verdict is Verdict.PASS, (case["id"], results["encode-le"].detail)
-        assert results["decode-be"].verdict is Verdict.PASS, (case["id"], results["decode-be"].detail)
+        for check in {"encode-le", "decode-be"} & set(case["checks"]):  # a zero timestamp's valid case only decodes
+            assert results[check].verdict is Verdict.PASS, (case["id"], results[check].detail)
         assert "encode-be" not in results  # imcpy only emits little-endian: not applicable
 
 
@@ -79,11 +82,12 @@ def test_i2_cases_keep_dune_from_reading_an_empty_list(records):
     imcpy's verdict after that is memory-dependent, so only that it returns is required of it.
     """
     i2 = [c for c in records if c.get("erratum") == "I2"]
-    assert len(i2) == 6
+    assert len(i2) == 12  # six cuts, each also followed by the next frame (where DUNE then reads on)
     for case in i2:
         (order, frame), = case["frames"].items()
         raw = bytes.fromhex(frame)
-        assert int.from_bytes(raw[-2:], "little" if order == "le" else "big") != 0, case["id"]
+        end = 22 + int.from_bytes(raw[4:6], "little" if order == "le" else "big")
+        assert int.from_bytes(raw[end - 2:end], "little" if order == "le" else "big") != 0, case["id"]
         try:
             imcpy.Packet.deserialize(raw)
         except RuntimeError:
@@ -94,7 +98,7 @@ def test_imcpy_error_text_per_rule(imcpy_adapter, records):
     """The documented table: the DUNE error text imcpy gives for each rule (adapters/README.md)."""
     texts = collections.defaultdict(set)
     for case in records:
-        if expectation(case, EDITION) != "invalid" or case.get("erratum") == "I2":
+        if expectation(case, EDITION) != "invalid" or case.get("erratum") == "I2" or "frames" not in case:
             continue
         (order, frame), = ((o, f) for o, f in case["frames"].items())
         try:
@@ -107,7 +111,6 @@ def test_imcpy_error_text_per_rule(imcpy_adapter, records):
 IMCPY_ERROR_TEXTS = {
     "header-truncated": {"buffer is too short to be unpacked"},
     "sync": {"invalid synchronization number"},
-    "size-limit": {"buffer is too short to be unpacked"},
     "size-exceeds-data": {"buffer is too short to be unpacked"},
     "crc": {"invalid CRC"},
     "unknown-id": {"invalid message identification number"},
@@ -125,7 +128,7 @@ def test_accepted_frames_keep_every_byte_in_dune(records, defs):
         if expectation(case, EDITION) != "acceptable" or case["reference"] != "accept":
             continue
         for check in case["checks"]:
-            op, order = check.split("-")
+            op, _, order = check.partition("-")
             if op != "decode":
                 continue
             decoded = imcpy.Packet.deserialize(bytes.fromhex(case["frames"][order]))
@@ -134,10 +137,12 @@ def test_accepted_frames_keep_every_byte_in_dune(records, defs):
     assert checked > 200
 
 
-def test_acceptable_cases_match_the_reference_behaviour(imcpy_verdicts, records):
-    """imc-wire.md lists what real receivers do; imcpy, DUNE's codec, must do exactly that."""
+def test_acceptable_cases_match_the_reference_behaviour(suite, imcpy_verdicts, records):
+    """imc-wire.md lists what real receivers do; imcpy, DUNE's codec, must do exactly that, but where an erratum of its
+    binding says otherwise (I3: its getters replace non-ASCII text, a permitted outcome of its own)."""
     for case in records:
-        if expectation(case, EDITION) != "acceptable" or case["id"] not in imcpy_verdicts:
+        if expectation(case, EDITION) != "acceptable" or case["id"] not in imcpy_verdicts or \
+                suite.implementation_errata(case["id"], "imcpy", case.get("tags", ())):
             continue
         for r in imcpy_verdicts[case["id"]][1]:
             if r.verdict is Verdict.IMPL_DEFINED:
@@ -155,13 +160,14 @@ def test_pyimclsts_produces_the_same_be_bytes(suite, pyimclsts_verdicts, records
         if expectation(case, EDITION) != "valid" or suite.implementation_errata(case["id"], "pyimclsts"):
             continue
         results = {r.check: r for r in pyimclsts_verdicts[case["id"]][1]}
-        assert results["encode-be"].verdict is Verdict.PASS, (case["id"], results["encode-be"].detail)
-        checked += 1
-    assert checked > 900
+        if "encode-be" in case["checks"]:
+            assert results["encode-be"].verdict is Verdict.PASS, (case["id"], results["encode-be"].detail)
+            checked += 1
+    assert checked > 850
 
 
-def test_pyimclsts_failures_are_exactly_its_documented_defects(suite, pyimclsts_verdicts):
+def test_pyimclsts_failures_are_exactly_its_documented_defects(suite, pyimclsts_verdicts, records):
     assert unexplained(suite, pyimclsts_verdicts, "pyimclsts") == {}
-    assert stale_globs(suite, pyimclsts_verdicts, "pyimclsts") == []
+    assert stale_globs(suite, pyimclsts_verdicts, "pyimclsts", records) == []
     failing = sum(1 for v, _ in pyimclsts_verdicts.values() if v not in PASSING)
     assert failing > 1000  # no CRC and no sync check: the report must show it

@@ -399,7 +399,8 @@ def test_vectors_accepts_the_suite_folder_as_well_as_its_cases(capsys):
     assert main(["list", "--vectors", str(imc_data()), "--message", "LblRange"]) == 0
     by_suite = capsys.readouterr().out
     assert main(["list", "--vectors", str(imc_data("cases")), "--message", "LblRange"]) == 0
-    assert capsys.readouterr().out == by_suite and by_suite.count("\n") == 93
+    cases = json.loads(imc_data("cases", "200-LblRange.json").read_text(encoding="utf-8"))["cases"]
+    assert capsys.readouterr().out == by_suite and by_suite.count("\n") == len(cases)
 
 
 def test_version(capsys):

@@ -113,14 +113,18 @@ def imcpy_cases(whole):
     return judged(ImcpyAdapter(), whole, "imcpy")
 
 
+# Erratum I5: FollowRefState cut before the field after its null inline message, alone and followed by the next frame
+I5_CASES = {f"imc/FollowRefState/{family}/before-FollowRefState.reference.Reference.radius/{o}"
+            for family in ("payload-cut", "payload-cut-then-frame") for o in ("le", "be")}
+
+
 def test_imcpy_judged_over_the_whole_protocol_fails_only_where_an_erratum_says_why(imcpy_cases):
     cases = imcpy_cases
     verdicts = Counter(c.verdict for c in cases)
     assert verdicts[Verdict.PASS] > 40_000 and not verdicts[Verdict.ADAPTER_ERROR]
     failing = [c for c in cases if c.verdict == Verdict.FAIL]
     assert failing and all(c.errata for c in failing), [c.id for c in failing if not c.errata][:5]
-    assert {c.id for c in failing if "I5" in c.errata} == {
-        f"imc/FollowRefState/payload-cut/before-FollowRefState.reference.Reference.radius/{o}" for o in ("le", "be")}
+    assert {c.id for c in failing if "I5" in c.errata} == I5_CASES
     unsupported = [c for c in cases if c.verdict == Verdict.UNSUPPORTED]  # erratum I6: Boolean fields cannot be read
     assert {c.id.split("/")[1] for c in unsupported} >= {"Sample", "GetWorldCoordinates"}
     assert all("imcpy's binding cannot return Sample.syringe0" in c.detail
@@ -150,8 +154,7 @@ def test_dunes_cpp_codec_judged_over_the_whole_protocol_fails_only_erratum_i5(fu
         session.close()
     cases = [c for m in result.messages for c in m.cases]
     assert {c.verdict for c in cases} == {Verdict.PASS, Verdict.IMPL_DEFINED, Verdict.FAIL}
-    assert {c.id for c in cases if c.verdict == Verdict.FAIL} == {
-        f"imc/FollowRefState/payload-cut/before-FollowRefState.reference.Reference.radius/{o}" for o in ("le", "be")}
+    assert {c.id for c in cases if c.verdict == Verdict.FAIL} == I5_CASES
 
 
 def test_pyimclsts_judged_over_the_whole_protocol_fails_only_where_an_erratum_says_why(whole):

@@ -1,4 +1,5 @@
-"""The report renderers on real runs: imcpy (decode failures, erratum I3) and a deliberately broken encoder
+"""The report renderers on real runs: imcpy (passing), pyimclsts (failures its errata explain: no CRC check, P1) and a
+deliberately broken encoder
 (LblRange.range off by one, so encode checks fail with byte differences), plus a hostile result whose
 implementation-provided text tries to inject markup into every format.
 """
@@ -68,6 +69,14 @@ def imcpy_result(suite, cases, imcpy_adapter):
 
 
 @pytest.fixture(scope="module")
+def pyimclsts_result(suite, cases, pyimclsts_adapter):
+    """A real implementation's failures: pyimclsts over three messages (its errata explain every one)."""
+    chosen = [c for c in cases if c.group in ("Announce", "LblRange", "TextMessage")]
+    return run_cases(LibrarySession(pyimclsts_adapter, "pyimclsts"), suite, chosen, edition="imc-5.4.30",
+                     adapter="pyimclsts")
+
+
+@pytest.fixture(scope="module")
 def broken_result(suite, defs, cases):
     return run_cases(LibrarySession(BrokenEncoder(defs), "broken"), suite, cases, edition="imc-5.4.30", adapter="broken")
 
@@ -87,8 +96,9 @@ def test_registry():
     assert RENDERERS == {"json": render_json, "junit": render_junit, "markdown": render_markdown, "html": render_html}
 
 
-def test_runs_fail_as_intended(imcpy_result, broken_result):
-    assert imcpy_result.summary["FAIL"] == 66 and imcpy_result.exit_code() == 1
+def test_runs_fail_as_intended(imcpy_result, pyimclsts_result, broken_result):
+    assert "FAIL" not in imcpy_result.summary and imcpy_result.exit_code() == 0
+    assert pyimclsts_result.summary["FAIL"] > 100 and pyimclsts_result.exit_code() == 1
     failing = {c.id for c in broken_result.cases if c.verdict is Verdict.FAIL}
     assert FAILING_CASE in failing and all(i.startswith("imc/LblRange/") for i in failing)
 
@@ -172,24 +182,24 @@ def junit_tree(result) -> ET.Element:
     return ET.fromstring(render_junit(result).encode("utf-8"))
 
 
-def test_junit_structure_and_counts(imcpy_result):
-    root = junit_tree(imcpy_result)
+def test_junit_structure_and_counts(pyimclsts_result):
+    root = junit_tree(pyimclsts_result)
     suites = root.findall("testsuite")
-    assert [s.get("name") for s in suites] == [f"imc/{m.name}" for m in imcpy_result.messages]
-    assert len(root.findall("testsuite/testcase")) == len(imcpy_result.cases) == int(root.get("tests"))
-    summary = imcpy_result.summary
+    assert [s.get("name") for s in suites] == [f"imc/{m.name}" for m in pyimclsts_result.messages]
+    assert len(root.findall("testsuite/testcase")) == len(pyimclsts_result.cases) == int(root.get("tests"))
+    summary = pyimclsts_result.summary
     failures = summary.get("FAIL", 0) + summary.get("WAIVER_STALE", 0)
     errors = sum(summary.get(v, 0) for v in ("CRASH", "TIMEOUT", "ADAPTER_ERROR"))
-    assert int(root.get("failures")) == len(root.findall(".//failure")) == failures == 66
+    assert int(root.get("failures")) == len(root.findall(".//failure")) == failures > 100
     assert int(root.get("errors")) == len(root.findall(".//error")) == errors
     assert int(root.get("skipped")) == len(root.findall(".//skipped")) == summary.get("UNSUPPORTED", 0)
-    for suite, message in zip(suites, imcpy_result.messages):
+    for suite, message in zip(suites, pyimclsts_result.messages):
         assert int(suite.get("tests")) == len(suite.findall("testcase")) == len(message.cases)
         assert int(suite.get("failures")) == len(suite.findall("testcase/failure"))
-    case = root.find(".//testcase[@name='imc/Announce/text/sys_name/utf8']")
+    case = root.find(".//testcase[@name='imc/Announce/crc/header-timestamp/le']")
     assert case.get("classname") == "imc.Announce"
-    assert case.find("failure").get("type") == "FAIL" and "errata: I3" in case.find("failure").text
-    impl_defined = next(c for c in imcpy_result.cases if c.verdict is Verdict.IMPL_DEFINED)
+    assert case.find("failure").get("type") == "FAIL" and "errata: P1" in case.find("failure").text
+    impl_defined = next(c for c in pyimclsts_result.cases if c.verdict is Verdict.IMPL_DEFINED)
     assert "IMPL_DEFINED" in root.find(f".//testcase[@name='{impl_defined.id}']/system-out").text
 
 
@@ -237,15 +247,18 @@ def columns(line: str) -> int:
     return len(re.findall(r"(?<!\\)\|", line)) - 1
 
 
-def test_markdown_summary(imcpy_result):
-    text = render_markdown(imcpy_result)
-    assert text.splitlines()[0].startswith("## ❌ IMC conformance: FAIL — imcpy 1.1.2")
+def test_markdown_summary(pyimclsts_result):
+    text = render_markdown(pyimclsts_result)
+    assert text.splitlines()[0].startswith("## ❌ IMC conformance: FAIL — pyimclsts 0.1.2.1")
     assert "| Message | Verdict | PASS | FAIL | IMPL_DEFINED |" in text
-    assert "| Announce (151) | ❌ FAIL | 163 | 6 | 16 |" in text
-    assert "<details><summary>66 failing, non-strict or inconclusive cases</summary>" in text
-    assert "<code>imc/Announce/text/sys\\_name/utf8</code>" in text
-    assert "and 16 more" in text
-    assert text.count("| ❌ FAIL |") == 50 + sum(m.verdict == "FAIL" for m in imcpy_result.messages)
+    announce = next(m for m in pyimclsts_result.messages if m.name == "Announce")
+    counts = {v: sum(c.verdict.value == v for c in announce.cases) for v in ("PASS", "FAIL", "IMPL_DEFINED")}
+    assert f"| Announce (151) | ❌ FAIL | {counts['PASS']} | {counts['FAIL']} | {counts['IMPL_DEFINED']} |" in text
+    shown = sum(c.verdict.value in ("FAIL", "NON_STRICT", "INCONCLUSIVE") for c in pyimclsts_result.cases)
+    assert f"<details><summary>{shown} failing, non-strict or inconclusive cases</summary>" in text
+    assert "<code>imc/Announce/crc/header-timestamp/le</code>" in text
+    assert f"and {shown - 50} more" in text
+    assert text.count("| ❌ FAIL |") == 50 + sum(m.verdict == "FAIL" for m in pyimclsts_result.messages)
 
 
 def test_markdown_escapes_table_cells(hostile_result):
@@ -325,11 +338,12 @@ def test_html_marks_differing_bytes_by_field(broken_result):
     assert f"Failing cases ({sum(c.verdict is Verdict.FAIL for c in broken_result.cases)})" in "".join(dom.text)
 
 
-def test_html_caps_detailed_failures(imcpy_result, monkeypatch):
+def test_html_caps_detailed_failures(pyimclsts_result, monkeypatch):
     monkeypatch.setattr(html_module, "MAX_DETAILED", 5)
-    dom = Dom(render_html(imcpy_result))
+    dom = Dom(render_html(pyimclsts_result))
     assert sum(1 for tag, attrs in dom.tags if tag == "section" and "data-case" in attrs) == 5
-    assert "Showing the first 5 of 66 failing cases" in "".join(dom.text)
+    failing = sum(c.verdict is Verdict.FAIL for c in pyimclsts_result.cases)
+    assert f"Showing the first 5 of {failing} failing cases" in "".join(dom.text)
 
 
 def test_html_long_frames_show_rows_around_differences():

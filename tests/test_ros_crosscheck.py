@@ -42,6 +42,12 @@ def failing(found: dict) -> dict:
     return {cid: results for cid, (v, results) in found.items() if v not in PASSING}
 
 
+def shown(found: dict) -> list[str]:
+    """The cases that fail, or where the implementation chose another outcome than the reference's."""
+    return [cid for cid, (v, results) in found.items() if v not in PASSING or any(
+        r.outcome is not None and r.outcome != BY_ID[cid].get("reference") for r in results)]
+
+
 @pytest.mark.parametrize("edition", EDITIONS)
 @pytest.mark.parametrize("name", ["genpy", "rosbags"])
 def test_the_implementation_agrees_with_every_vector_but_its_documented_errata(name, edition):
@@ -56,7 +62,9 @@ def test_the_implementation_agrees_with_every_vector_but_its_documented_errata(n
 
 @pytest.mark.parametrize("name", ["genpy", "rosbags"])
 def test_every_erratum_of_the_implementation_is_still_observed(name):
-    seen = collections.Counter(e for edition in EDITIONS for cid in failing(run(name, edition))
+    """Observed: a case it names fails, or an acceptable one got another outcome than the reference's (an erratum
+    about a permitted choice, G2's lossy text, shows that way)."""
+    seen = collections.Counter(e for edition in EDITIONS for cid in shown(run(name, edition))
                                for e in SUITE.implementation_errata(cid, name, BY_ID[cid]["tags"]))
     documented = {e["id"] for e in SUITE.errata
                   if name in erratum_keys(e.get("implementation")) and ("cases" in e or "tags" in e)}
@@ -76,9 +84,13 @@ def test_every_valid_frame_is_what_both_implementations_serialize_and_describe()
 
 
 def test_genpy_shows_the_reference_outcome_of_every_acceptable_case():
+    """genpy, the canonical ROS 1 code, is the reference: its outcome is the case's, but where an erratum of its own
+    says otherwise (G2: it replaces string bytes that are not UTF-8, a permitted outcome of its own)."""
     for edition in EDITIONS:
         for cid, (_, results) in run("genpy", edition).items():
             case = BY_ID[cid]
+            if SUITE.implementation_errata(cid, "genpy", case["tags"]):
+                continue
             for r in results:
                 if r.verdict is Verdict.IMPL_DEFINED:
                     assert r.outcome == case["reference"], (cid, r.outcome)
@@ -114,11 +126,10 @@ def nests(full: str, wanted) -> bool:
 TARGETS = {  # mutant -> (the cases that must catch it, at least one; the cases that may)
     ros_mutants.HeaderWithoutSeq: (lambda c: "valid" in c["tags"], lambda c: nests(c["type"], lambda f: f.type.base == "std_msgs/Header") or "definition" in c["tags"]),
     ros_mutants.Float32AsFloat64: (lambda c: "valid" in c["tags"], lambda c: nests(c["type"], lambda f: f.type.base == "float32")),
-    ros_mutants.FixedArraysWithCount: (lambda c: c.get("rule") == "fixed-array-length",
+    ros_mutants.FixedArraysWithCount: (lambda c: c.get("class") == "fixed-array-length",
                                        lambda c: nests(c["type"], lambda f: f.type.array is not None and f.type.array >= 0)),
     ros_mutants.AcceptsTruncation: (lambda c: c.get("rule") == "truncated", lambda c: "invalid" in c["tags"] and "encode-ros1" not in c["checks"]),
     ros_mutants.ZeroesImpossibleLengths: (lambda c: c.get("rule") == "length-overrun", lambda c: "invalid" in c["tags"] and "encode-ros1" not in c["checks"]),
-    ros_mutants.WrapsIntegers: (lambda c: c.get("rule") == "value-out-of-type", lambda c: c.get("rule") == "value-out-of-type"),
     ros_mutants.SignedTimeSeconds: (lambda c: {"kind:time", "class:max"} <= set(c["tags"]),
                                     lambda c: {"kind:time", "class:max"} <= set(c["tags"]) or nests(c["type"], lambda f: f.type.base == "time")),
     ros_mutants.SortedMd5: (lambda c: "definition" in c["tags"], lambda c: "definition" in c["tags"]),
@@ -150,8 +161,16 @@ def test_refusing_trailing_bytes_is_implementation_defined():
     assert {r.outcome for cid, (_, results) in found.items() if cid.endswith("trailing-bytes") for r in results} == {"reject"}
 
 
+def test_wrapping_integers_is_implementation_defined():
+    """The documentation does not make refusing an out-of-type integer a MUST: writing its low-order bits is the
+    permitted outcome truncate, recorded and never failed."""
+    found = mutant_run(ros_mutants.WrapsIntegers)
+    assert failing(found) == {}
+    assert {r.outcome for cid, (_, results) in found.items() if "/value-out-of-type/" in cid for r in results} == {"truncate"}
+
+
 def test_every_rule_with_vectors_has_a_mutant():
-    rules = {r["id"] for r in SUITE.rules if r["applies_to"] != "encoder"}
+    rules = {r["id"] for r in SUITE.rules if r["level"] == "must"}
     targeted = {rule for mutant, (must, _) in TARGETS.items() for rule in rules
                 if any(must(c) for c in BY_ID.values() if c.get("rule") == rule)}
     assert targeted == rules

@@ -74,14 +74,14 @@ def test_merged_shards_are_the_whole_run(tmp_path, capsys):
     from imc_conformance.cli import main
 
     whole = tmp_path / "whole.json"
-    assert main(["run", "--adapter", "imcpy", "--no-progress", "--message", "LblRange", "--message", "AcousticStatus",
-                 "--json", str(whole)]) == 1
+    code = main(["run", "--adapter", "imcpy", "--no-progress", "--message", "LblRange", "--message", "AcousticStatus",
+                 "--json", str(whole)])
     parts = [tmp_path / f"shard{k}.json" for k in (1, 2, 3)]
     for k, part in enumerate(parts, 1):
         main(["run", "--adapter", "imcpy", "--no-progress", "--message", "LblRange", "--message", "AcousticStatus",
               "--shard", f"{k}/3", "--json", str(part)])
     merged = tmp_path / "merged.json"
-    assert main(["report", "--merge", *map(str, reversed(parts)), "--json", str(merged)]) == 1
+    assert main(["report", "--merge", *map(str, reversed(parts)), "--json", str(merged)]) == code
 
     def cases(path):
         doc = json.loads(path.read_text())
@@ -138,7 +138,7 @@ def test_the_pytest_plugin_gives_the_same_outcomes_under_xdist(tmp_path):
     outcomes = {}
     for workers in ([], ["-n", "2"]):
         done = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q", "-rA", *workers,
-                               "--conformance-adapter=imcpy", "--conformance-message", "TextMessage"],
+                               "--conformance-adapter=pyimclsts", "--conformance-id", "imc/LblRange/*"],
                               capture_output=True, text=True, timeout=300, cwd=tmp_path)
         outcomes[bool(workers)] = sorted(line.split(" - ")[0] for line in done.stdout.splitlines()
                                          if line.startswith(("PASSED ", "FAILED ", "SKIPPED ")))

@@ -154,7 +154,7 @@ def test_a_program_that_keeps_crashing_cannot_hang_the_run():
     kinds = [a.kind for a in answers.values()]
     # each restart blames one call; a roundtrip shares the answer to decoding its frame (CRASH too)
     inherited = [(cid, check) for (cid, check), a in answers.items() if check.startswith("roundtrip-")
-                 and a.kind == "crash" and answers[cid, "decode-" + check.split("-")[1]] is a]
+                 and a.kind == "crash" and answers.get((cid, "decode-" + check.split("-")[1])) is a]
     assert kinds.count("crash") == MAX_RESTARTS + len(inherited)
     assert kinds.count("adapter-error") == len(kinds) - kinds.count("crash")
     assert all("keeps crashing" in a.reason for a in answers.values() if a.kind == "adapter-error")  # no more restarts
@@ -198,13 +198,14 @@ def test_a_65536_byte_frame_and_a_131_kb_answer_go_through(reference):
     assert {len(f) // 2 for c in big for f in c.data["frames"].values()} == {65535, 65536}
     with session(program("reference")) as s:
         assert verdicts(s, big) == {c.id: reference[c.id] for c in big}
-    assert {reference[c.id] for c in big} == {Verdict.PASS}
+    # valid frames of 65,535 bytes pass; those of 65,536 (over DUNE's cap, a practice) are implementation-defined
+    assert {reference[c.id] for c in big} == {Verdict.PASS, Verdict.IMPL_DEFINED}
 
 
 def test_a_line_over_max_line_is_an_adapter_error(reference):
     max_line = 100_000  # a valid 65535-byte frame is a 131 KB encode answer
-    too_long = {c.id for c in SELECTION
-                if expectation(c.data, EDITION) == "valid" and max(map(len, c.data["frames"].values())) > max_line}
+    too_long = {c.id for c in SELECTION if expectation(c.data, EDITION) in ("valid", "acceptable")
+                and max(map(len, c.data.get("frames", {"": ""}).values())) > max_line}
     assert "imc/AcousticStatus/text/info/max-payload" in too_long
     with session(program("reference"), max_line=max_line) as s:
         got = verdicts(s, SELECTION)

@@ -88,6 +88,7 @@ def command(args) -> int:
         options = live.options(args, suite, everything)
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
+    cases, held_notes = hold_practices(cases, options)
     if args.target and (args.adapter or args.adapter_cmd or args.adapter_socket):
         raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd/--adapter-socket, not both")
     name, argv = (args.target, None) if args.target else adapter_choice(args, suite)
@@ -116,7 +117,7 @@ def command(args) -> int:
     try:
         with progress_bar(args.no_progress) as progress:
             result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
-                               waivers=waivers, strict=args.strict, notes=notes + live.notes(args, options),
+                               waivers=waivers, strict=args.strict, notes=notes + held_notes + live.notes(args, options),
                                progress=progress, options=options)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
@@ -146,6 +147,22 @@ def command(args) -> int:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     return 2 if problems else result.exit_code()
+
+
+def hold_practices(cases: list, options: dict) -> tuple[list, list[str]]:
+    """The byte vectors as the run's profile judges them: those about a rule of practice it holds (``practices``,
+    e.g. DUNE's frame cap) are invalid for that rule; and a note saying how many."""
+    from ..core.cases import Case
+    from ..kinds.vector.provenance import held
+
+    profile = options.get("profile") or {}
+    practices = frozenset(profile.get("practices", ()))
+    if not practices:
+        return cases, []
+    out = [Case(c.id, c.group, c.kind, held(c.data, practices)) if c.kind == "vector" else c for c in cases]
+    changed = sum(1 for a, b in zip(cases, out) if a.data is not b.data)
+    return out, [f"profile {profile['name']} holds the practice {', '.join(sorted(practices))}: {changed} cases about it "
+                 "judged invalid instead of acceptable"]
 
 
 @contextmanager

@@ -5,6 +5,11 @@
 ``FrameError`` naming the broken rule and the byte offset. ``layout`` names the bytes of a frame. Inline
 messages are followed to ``NESTING_LIMIT`` levels both ways: a frame nested deeper is ``NotJudged`` (an
 input cannot drive the recursion), a message nested deeper is refused.
+
+Every rule has a switch. ``off``: rules not checked, each replaced by what a reader without that check does
+(``LENIENT``): the oracle of ``generate --check`` proves with it that an invalid vector breaks exactly the rules
+it names, and the per-rule mutants are the codec with one switch off. ``held``: rules of practice (rules.json
+level "practice", e.g. DUNE's frame cap ``size-limit``) checked too; none is by default.
 """
 
 from __future__ import annotations
@@ -23,6 +28,20 @@ from .values import raw_bytes, text_bytes, text_value
 HEADER_SIZE = 20
 FOOTER_SIZE = 2
 ORDERS = {"le": "<", "be": ">"}
+# What a reader does with each rule switched off (``off``): the one behaviour the oracle and the mutants share.
+LENIENT = {
+    "header-truncated": "a frame shorter than the header is padded with zero bytes to the header's 20",
+    "sync": "a frame whose first two bytes name no byte order is read in the order whose size field fits its length",
+    "size-exceeds-data": "the payload is what lies between the header and the last two bytes, taken as the CRC",
+    "crc": "the footer is not compared with the CRC",
+    "unknown-id": "an undefined or null message id is read as a message without fields",
+    "field-overrun": "a field that does not fit the payload takes its empty value (0, empty, null)",
+    "length-overrun": "a plaintext or rawdata length is clamped to the bytes left in the payload",
+    "list-count-overrun": "a message-list ends at the payload's end, whatever its count claims",
+    "unknown-inline-id": "an inline message or list element with an undefined id is read as null",
+    "payload-overflow": "a length, count or size over 65535 is written modulo 65536",
+}
+NONE: frozenset[str] = frozenset()
 HEADER_LAYOUT = ((0, 2, "sync", "uint16_t"), (2, 2, "mgid", "uint16_t"), (4, 2, "size", "uint16_t"),
                  (6, 8, "timestamp", "fp64_t"), (14, 2, "src", "uint16_t"), (16, 1, "src_ent", "uint8_t"),
                  (17, 2, "dst", "uint16_t"), (19, 1, "dst_ent", "uint8_t"))
@@ -35,16 +54,20 @@ def byte_order_of(frame: bytes) -> str | None:
 
 # ---------------------------------------------------------------- encoding
 
-def encode(defs: Definitions, message: dict, byte_order: str = "le") -> bytes:
-    """The frame of ``message`` (decoded form) in ``byte_order``; raises EncodeError."""
+def encode(defs: Definitions, message: dict, byte_order: str = "le", *, off: frozenset[str] = NONE,
+           held: frozenset[str] = NONE) -> bytes:
+    """The frame of ``message`` (decoded form) in ``byte_order``; raises EncodeError. ``off`` and ``held``: the
+    rules switched off and the rules of practice held (see the module's docstring)."""
     e = ORDERS[byte_order]
     mdef = _message_def(defs, message.get("abbrev"))
-    payload = encode_payload(defs, mdef, message.get("fields", {}), e)
-    if len(payload) > defs.max_payload:
+    payload = encode_payload(defs, mdef, message.get("fields", {}), e, off=off)
+    if len(payload) > 0xFFFF and "payload-overflow" not in off:
+        raise EncodeError("payload-overflow", f"a payload of {len(payload)} bytes does not fit the u16 size field")
+    if "size-limit" in held and len(payload) > defs.max_payload:
         raise EncodeError("size-limit", f"payload of {len(payload)} bytes exceeds {defs.max_payload}")
     header = dict(defs.header_defaults, **message.get("header", {}))
     try:
-        head = struct.pack(e + "HHH", defs.sync, mdef.id, len(payload)) + struct.pack(
+        head = struct.pack(e + "HHH", defs.sync, mdef.id, len(payload) & 0xFFFF) + struct.pack(
             e + "Q", float_to_bits(header["timestamp"], 8)
         ) + struct.pack(e + "HBHB", header["src"], header["src_ent"], header["dst"], header["dst_ent"])
     except (struct.error, ValueError, TypeError) as exc:
@@ -53,7 +76,8 @@ def encode(defs: Definitions, message: dict, byte_order: str = "le") -> bytes:
     return body + struct.pack(e + "H", crc16(body))
 
 
-def encode_payload(defs: Definitions, mdef: MessageDef, fields: dict, e: str, depth: int = 0) -> bytes:
+def encode_payload(defs: Definitions, mdef: MessageDef, fields: dict, e: str, depth: int = 0, *,
+                   off: frozenset[str] = NONE) -> bytes:
     unknown = set(fields) - {f.abbrev for f in mdef.fields}
     if unknown:
         raise EncodeError("unknown-field", f"{mdef.abbrev} has no field {sorted(unknown)[0]!r}")
@@ -61,11 +85,19 @@ def encode_payload(defs: Definitions, mdef: MessageDef, fields: dict, e: str, de
     for f in mdef.fields:
         if f.abbrev not in fields:
             raise EncodeError("missing-field", f"{mdef.abbrev}.{f.abbrev} is missing")
-        out += encode_field(defs, mdef, f, fields[f.abbrev], e, depth)
+        out += encode_field(defs, mdef, f, fields[f.abbrev], e, depth, off=off)
     return bytes(out)
 
 
-def encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str, depth: int = 0) -> bytes:
+def _u16_prefix(e: str, count: int, where: str, what: str, off: frozenset[str]) -> bytes:
+    """A length or count prefix; refused (payload-overflow) where it cannot be carried in 16 bits."""
+    if count > 0xFFFF and "payload-overflow" not in off:
+        raise EncodeError("payload-overflow", f"{where}: {count} {what} exceed a u16 {'count' if what == 'elements' else 'length'}")
+    return struct.pack(e + "H", count & 0xFFFF)
+
+
+def encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str, depth: int = 0, *,
+                 off: frozenset[str] = NONE) -> bytes:
     where = f"{mdef.abbrev}.{f.abbrev}"
     try:
         if f.is_float:
@@ -79,23 +111,20 @@ def encode_field(defs: Definitions, mdef: MessageDef, f: FieldDef, value, e: str
             return struct.pack(e + SCALAR_FORMATS[f.type], value)
         if f.type in ("plaintext", "rawdata"):
             data = text_bytes(value) if f.type == "plaintext" else raw_bytes(value)
-            if len(data) > 0xFFFF:
-                raise EncodeError("size-limit", f"{where}: {len(data)} bytes exceed a u16 length")
-            return struct.pack(e + "H", len(data)) + data
+            return _u16_prefix(e, len(data), where, "bytes", off) + data
         if f.type == "message":
-            return _encode_inline(defs, value, e, where, depth)
+            return _encode_inline(defs, value, e, where, depth, off)
         if value is None or not isinstance(value, list):
             raise EncodeError("value-type", f"{where}: a message-list must be an array")
-        if len(value) > 0xFFFF:
-            raise EncodeError("size-limit", f"{where}: {len(value)} elements exceed a u16 count")
-        return struct.pack(e + "H", len(value)) + b"".join(_encode_inline(defs, v, e, where, depth) for v in value)
+        return _u16_prefix(e, len(value), where, "elements", off) + b"".join(
+            _encode_inline(defs, v, e, where, depth, off) for v in value)
     except ValueError as exc:
         if isinstance(exc, EncodeError):
             raise
         raise EncodeError("value-type", f"{where}: {exc}") from exc
 
 
-def _encode_inline(defs: Definitions, value, e: str, where: str, depth: int) -> bytes:
+def _encode_inline(defs: Definitions, value, e: str, where: str, depth: int, off: frozenset[str]) -> bytes:
     if value is None:
         return struct.pack(e + "H", defs.null_id)
     if not isinstance(value, dict):
@@ -103,7 +132,7 @@ def _encode_inline(defs: Definitions, value, e: str, where: str, depth: int) -> 
     if depth >= NESTING_LIMIT:
         raise EncodeError("value-type", f"{where}: inline messages nested deeper than {NESTING_LIMIT} levels")
     inner = _message_def(defs, value.get("abbrev"))
-    return struct.pack(e + "H", inner.id) + encode_payload(defs, inner, value.get("fields", {}), e, depth + 1)
+    return struct.pack(e + "H", inner.id) + encode_payload(defs, inner, value.get("fields", {}), e, depth + 1, off=off)
 
 
 def _message_def(defs: Definitions, abbrev) -> MessageDef:
@@ -115,42 +144,65 @@ def _message_def(defs: Definitions, abbrev) -> MessageDef:
 
 # ---------------------------------------------------------------- decoding
 
-def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None) -> dict:
-    """The decoded form of ``frame``; raises FrameError. Appends the frame's byte map to ``spans``."""
+def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None, *, off: frozenset[str] = NONE,
+           held: frozenset[str] = NONE) -> dict:
+    """The decoded form of ``frame``; raises FrameError. Appends the frame's byte map to ``spans``. ``off`` and
+    ``held``: the rules switched off and the rules of practice held (see the module's docstring)."""
     n = len(frame)
     if n < HEADER_SIZE:
-        raise FrameError("header-truncated", n, f"{n} bytes cannot hold the {HEADER_SIZE}-byte header")
+        if "header-truncated" not in off:
+            raise FrameError("header-truncated", n, f"{n} bytes cannot hold the {HEADER_SIZE}-byte header")
+        frame, n = frame.ljust(HEADER_SIZE, b"\0"), HEADER_SIZE
     order = byte_order_of(frame)
     if order is None:
-        raise FrameError("sync", 0, f"synchronization bytes {frame[:2].hex()} are neither 54fe nor fe54")
+        if "sync" not in off:
+            raise FrameError("sync", 0, f"synchronization bytes {frame[:2].hex()} are neither 54fe nor fe54")
+        order = _order_by_size(frame)
     e = ORDERS[order]
     _, mgid, size = struct.unpack_from(e + "HHH", frame)
-    if size > defs.max_payload:
+    if "size-limit" in held and size > defs.max_payload:
         raise FrameError("size-limit", 4, f"size {size} exceeds the largest payload {defs.max_payload}")
-    if n < HEADER_SIZE + size + FOOTER_SIZE:
-        raise FrameError("size-exceeds-data", n, f"size {size} needs {HEADER_SIZE + size + FOOTER_SIZE} bytes, got {n}")
     end = HEADER_SIZE + size
-    (stored,) = struct.unpack_from(e + "H", frame, end)
-    computed = crc16(frame[:end])
-    if stored != computed:
-        raise FrameError("crc", end, f"stored CRC {stored:04x}, computed {computed:04x}")
+    if n < end + FOOTER_SIZE:
+        if "size-exceeds-data" not in off:
+            raise FrameError("size-exceeds-data", n, f"size {size} needs {end + FOOTER_SIZE} bytes, got {n}")
+        end = max(HEADER_SIZE, n - FOOTER_SIZE)
+    if "crc" not in off:
+        footer = frame[end:end + FOOTER_SIZE]
+        stored = struct.unpack(e + "H", footer)[0] if len(footer) == FOOTER_SIZE else None
+        computed = crc16(frame[:end])
+        if stored != computed:
+            shown = "absent" if stored is None else f"{stored:04x}"
+            raise FrameError("crc", end, f"stored CRC {shown}, computed {computed:04x}")
     mdef = defs.by_id.get(mgid)
     if mdef is None:
-        raise FrameError("unknown-id", 2, f"message id {mgid} is not defined")
+        if "unknown-id" not in off:
+            raise FrameError("unknown-id", 2, f"message id {mgid} is not defined")
+        mdef = MessageDef(id=mgid, abbrev=f"Unknown{mgid}", name="Unknown", clause="", fields=(), min_payload=0)
     ts_bits, src, src_ent, dst, dst_ent = struct.unpack_from(e + "QHBHB", frame, 6)
     if spans is not None:
         spans += [Span(start, start + size_, f"header.{name}", type_, "header") for start, size_, name, type_ in HEADER_LAYOUT]
         spans.append(Span(end, end + 2, "footer.crc16", "uint16_t", "footer"))
     fields = None
-    if spans is None:
+    if spans is None and not off:
         try:
             fields = defs.unpackers.fields(mdef, frame, e, HEADER_SIZE, end)[0]
         except Irregular:  # the reader names what is wrong
             pass
     if fields is None:
-        fields = _Reader(defs, frame, e, end, spans).fields(mdef, HEADER_SIZE, mdef.abbrev)
+        fields = _Reader(defs, frame, e, end, spans, off).fields(mdef, HEADER_SIZE, mdef.abbrev)
     header = {"timestamp": float_from_bits(ts_bits, 8), "src": src, "src_ent": src_ent, "dst": dst, "dst_ent": dst_ent}
     return {"abbrev": mdef.abbrev, "header": header, "fields": fields}
+
+
+def _order_by_size(frame: bytes) -> str:
+    """The byte order in which the rest of a frame holds (sync switched off): its size field fits the data exactly and
+    its footer is the CRC; failing that, one whose size fits exactly, else one whose frame the data holds; else LE."""
+    n = len(frame)
+    ends = {order: HEADER_SIZE + struct.unpack_from(ORDERS[order] + "H", frame, 4)[0] for order in ORDERS}
+    exact = [o for o in ORDERS if ends[o] + FOOTER_SIZE == n]
+    sound = [o for o in exact if struct.unpack_from(ORDERS[o] + "H", frame, ends[o])[0] == crc16(frame[:ends[o]])]
+    return next(iter(sound + exact + [o for o in ORDERS if ends[o] + FOOTER_SIZE <= n]), "le")
 
 
 def layout(defs: Definitions, frame: bytes) -> list[Span]:
@@ -161,15 +213,23 @@ def layout(defs: Definitions, frame: bytes) -> list[Span]:
 
 
 class _Reader:
-    def __init__(self, defs: Definitions, frame: bytes, e: str, end: int, spans: list[Span] | None):
-        self.defs, self.frame, self.e, self.end, self.spans = defs, frame, e, end, spans
+    def __init__(self, defs: Definitions, frame: bytes, e: str, end: int, spans: list[Span] | None,
+                 off: frozenset[str] = NONE):
+        self.defs, self.frame, self.e, self.end, self.spans, self.off = defs, frame, e, end, spans, off
         self.pos = HEADER_SIZE
         self.depth = 0
 
     def _take(self, count: int, rule: str, what: str, role: str | None = None) -> int:
         start = self.pos
         if start + count > self.end:
-            raise FrameError(rule, start, f"{what} needs {count} bytes, {self.end - start} left in the payload", role)
+            if rule not in self.off:
+                raise FrameError(rule, start, f"{what} needs {count} bytes, {self.end - start} left in the payload", role)
+            if rule == "length-overrun":  # clamped to the bytes left
+                count = self.end - start
+            else:  # field-overrun: the missing bytes read as zeros (an empty value)
+                missing = start + count - self.end
+                self.frame = self.frame[:self.end] + bytes(missing) + self.frame[self.end:]
+                self.end += missing
         self.pos += count
         return start
 
@@ -200,9 +260,16 @@ class _Reader:
             data = self.frame[start:self.pos]
             return text_value(data) if f.type == "plaintext" else data.hex()
         if f.type == "message":
+            if self.pos + 2 > self.end and "field-overrun" in self.off:
+                return None  # a missing inline id: absent
             return self.inline(path, "field-overrun")
         count = self._u16("field-overrun", f"{path} count", path + ".count", "count")
-        return [self.inline(f"{path}[{i}]", "list-count-overrun") for i in range(count)]
+        elements = []
+        for i in range(count):
+            if self.pos == self.end and "list-count-overrun" in self.off:
+                break
+            elements.append(self.inline(f"{path}[{i}]", "list-count-overrun"))
+        return elements
 
     def inline(self, path: str, rule: str):
         id_start = self.pos
@@ -211,6 +278,8 @@ class _Reader:
             return None
         inner = self.defs.by_id.get(mgid)
         if inner is None:
+            if "unknown-inline-id" in self.off:
+                return None
             raise FrameError("unknown-inline-id", id_start, f"{path} holds unknown message id {mgid}")
         if self.depth >= NESTING_LIMIT:
             raise NotJudged("nested-too-deep", id_start, f"inline messages nested deeper than {NESTING_LIMIT} levels, "

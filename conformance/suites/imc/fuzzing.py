@@ -7,7 +7,8 @@ within a declared range, ASCII plaintext, inline messages of the declared types)
 in both byte orders. A mutated frame is judged by the reference: refused (``invalid``, with its rule), or decoded
 to a message that is ``valid`` or, when it holds what the corpus files as implementation-defined (an enumeration
 value out of the table, an undefined bit, a float out of range, non-ASCII text, an inline message of another type,
-a null list element, bytes after the fields or the footer), ``acceptable``.
+a null list element, bytes after the fields or the footer; and, for a message to encode, a zero timestamp),
+``acceptable``, with the outcomes its classes of rules.json permit.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ from ...kinds.vector.errors import EncodeError, FrameError, NotJudged
 from ...kinds.vector.floats import FLOAT_CLASSES
 from . import codec
 from .codec import FOOTER_SIZE, HEADER_SIZE, ORDERS
+from .corpus.acceptable import classes, outcomes
+from .corpus.samples import ORDINARY_HEADER
 from .corpus.records import ALL_CHECKS, used_abbrevs
 from .crc16 import crc16
 from .definitions import Definitions, FieldDef, MessageDef
@@ -29,7 +32,10 @@ from .definitions import Definitions, FieldDef, MessageDef
 MAX_DEPTH = 2  # inline messages nest at most this deep in generated messages
 MAX_TEXT = 300  # bytes of a generated plaintext or rawdata
 MAX_LIST = 6  # elements of a generated message-list at the top level (fewer deeper)
-ACCEPT_OR_REJECT = [{"outcome": "accept"}, {"outcome": "reject"}]
+# The class of rules.json each acceptable reason (a tag errata are filed by) belongs to.
+CLASSES = {"out-of-table": "enum-out-of-table", "undefined-bit": "bitfield-undefined", "out-of-range": "out-of-range",
+           "non-ascii": "non-ascii-text", "null-element": "null-list-element", "wrong-type": "wrong-inline-type",
+           "trailing-bytes": "trailing-bytes", "unused-payload": "unused-payload", "zero-timestamp": "zero-timestamp"}
 MUTATIONS = ("bit-flip", "truncate", "extend", "size-past-data", "prefix-past-data", "sync", "crc", "id-neighbour",
              "inline-id-neighbour", "payload-byte")
 
@@ -148,12 +154,12 @@ class ImcFuzzSource:
             except EncodeError:  # e.g. a payload over the size limit: not a valid message
                 return None
             canonical = codec.decode(self.defs, frames["le"])
-            reasons = self.acceptable_reasons(canonical)  # a promoted message rebuilt in another edition
+            reasons = self.acceptable_reasons(canonical) + (  # a promoted message rebuilt in another edition
+                ["zero-timestamp"] if canonical["header"]["timestamp"] == 0 else [])
             if reasons:
                 return self.record(group, "acceptable", self.defs[group].clause, ALL_CHECKS,
                                    ["acceptable", "fuzz", *reasons, *self.tags(canonical)], frames=frames,
-                                   message=canonical, compare=pins_nan(canonical), outcomes=ACCEPT_OR_REJECT,
-                                   reference="accept")
+                                   message=canonical, compare=pins_nan(canonical), **acceptable_fields(reasons))
             return self.record(group, "valid", self.defs[group].clause, ALL_CHECKS, ["valid", "fuzz", *self.tags(canonical)],
                                frames=frames, message=canonical, compare=pins_nan(canonical))
         try:
@@ -182,11 +188,23 @@ class ImcFuzzSource:
         if reasons:
             return self.record(group, "acceptable", "imc-wire#what-real-receivers-do", [f"decode-{encoding}"],
                                ["acceptable", *reasons, *tags, *self.tags(decoded)], frames={encoding: frame},
-                               message=decoded, outcomes=ACCEPT_OR_REJECT, reference="accept", compare=pins_nan(decoded))
+                               message=decoded, compare=pins_nan(decoded), **acceptable_fields(reasons))
         frames = {o: frame if o == encoding else codec.encode(self.defs, decoded, o) for o in ("le", "be")}
-        return self.record(group, "valid", self.defs[group].clause, ["decode-le", "decode-be", "roundtrip"],
+        checks = ["decode-le", "decode-be", "roundtrip"]
+        if decoded["header"]["timestamp"] == 0:  # re-encoded, a zero timestamp may be stamped (class zero-timestamp)
+            return self.record(group, "acceptable", "imc-xml#header.timestamp", checks,
+                               ["acceptable", "zero-timestamp", *tags, *self.tags(decoded)], frames=frames,
+                               message=decoded, compare=pins_nan(decoded), **acceptable_fields(["zero-timestamp"]))
+        return self.record(group, "valid", self.defs[group].clause, checks,
                            ["valid", *tags, *self.tags(decoded)], frames=frames, message=decoded,
                            compare=pins_nan(decoded))
+
+    def ordinary(self, group: str, prop: str, case: dict) -> dict | None:
+        """A message finding with the corpus's ordinary header in place of the one hypothesis shrunk it to (zeros, a
+        -0.0 timestamp: properties of their own, which a promoted vector must not carry by accident)."""
+        if prop != "message":
+            return None
+        return self.case(group, prop, dict(case["message"], header=dict(ORDINARY_HEADER)))
 
     def known_elsewhere(self, frame: bytes, exc: FrameError) -> bool:
         """Whether the reference refused an id that IMC.xml defines (a message beyond the seeds): a receiver of the
@@ -306,6 +324,14 @@ class ImcFuzzSource:
             step = (1 if b % 2 else -1) * (1 + b % 3) if role else 1 + b % 8
             struct.pack_into(e + "H", body, s.start, (value + step) & 0xFFFF)
         return bytes(body) + struct.pack(e + "H", crc16(bytes(body)))
+
+
+def acceptable_fields(reasons: list[str]) -> dict:
+    """The class (or classes) of an acceptable generated case, the outcomes they permit and the reference's."""
+    names = list(dict.fromkeys(CLASSES[r] for r in reasons))
+    permitted = list(dict.fromkeys(o["outcome"] for n in names for o in outcomes(n)))
+    return {"class": names[0] if len(names) == 1 else names, "outcomes": [{"outcome": o} for o in permitted],
+            "reference": "accept" if all(classes()[n]["reference"] == "accept" for n in names) else "reject"}
 
 
 def framing_reasons(frame: bytes, spans) -> list[str]:

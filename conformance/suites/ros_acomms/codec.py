@@ -12,6 +12,9 @@ either form is accepted); floats as in every suite (``kinds.vector.floats``); ``
 and ``uint8[N]`` lowercase hex; other arrays JSON arrays. ``decode`` raises ``FrameError`` naming the
 broken rule (``truncated``, ``length-overrun``) and the byte offset; bytes after the message are ignored
 (as genpy, the canonical ROS 1 Python code, does; whether to accept them is implementation-defined).
+
+Each decoding rule has a switch (``off``): a rule switched off is replaced by what a reader without that check does
+(``LENIENT``), which is how ``generate --check`` proves that an invalid vector breaks exactly the rules it names.
 """
 
 from __future__ import annotations
@@ -24,6 +27,11 @@ from ...kinds.vector.floats import float_from_bits, float_to_bits
 from .definitions import PRIMITIVES, Edition, FieldType, Message
 
 EXACT_JSON = 2 ** 53  # integers at least this large are written as decimal strings
+LENIENT = {
+    "truncated": "the bytes a field needs past the end read as zeros",
+    "length-overrun": "a length or count is clamped to what the bytes left can hold",
+}
+NONE: frozenset[str] = frozenset()
 TIME = {"time": "<II", "duration": "<ii"}
 
 
@@ -158,11 +166,13 @@ def _array(edition: Edition, ftype: FieldType, value, where: str, out: bytearray
 
 # ---------------------------------------------------------------- decoding
 
-def decode(edition: Edition, full: str, frame: bytes, spans: list[Span] | None = None) -> dict:
-    """The decoded form of ``frame`` as type ``full``; raises FrameError. Appends the byte map to ``spans``."""
+def decode(edition: Edition, full: str, frame: bytes, spans: list[Span] | None = None, *,
+           off: frozenset[str] = NONE) -> dict:
+    """The decoded form of ``frame`` as type ``full``; raises FrameError. Appends the byte map to ``spans``. ``off``:
+    the rules switched off (see the module's docstring)."""
     if full not in edition:
         raise FrameError("unknown-type", 0, f"unknown type {full!r}")
-    reader = _Reader(edition, frame, spans)
+    reader = _Reader(edition, frame, spans, off)
     return {"type": full, "fields": reader.fields(edition[full], edition[full].name)}
 
 
@@ -174,14 +184,16 @@ def layout(edition: Edition, full: str, frame: bytes) -> list[Span]:
 
 
 class _Reader:
-    def __init__(self, edition: Edition, frame: bytes, spans: list[Span] | None):
-        self.edition, self.frame, self.spans = edition, frame, spans
+    def __init__(self, edition: Edition, frame: bytes, spans: list[Span] | None, off: frozenset[str] = NONE):
+        self.edition, self.frame, self.spans, self.off = edition, frame, spans, off
         self.pos = 0
 
     def take(self, count: int, what: str) -> int:
         start = self.pos
         if start + count > len(self.frame):
-            raise FrameError("truncated", start, f"{what} needs {count} bytes, {len(self.frame) - start} left")
+            if "truncated" not in self.off:
+                raise FrameError("truncated", start, f"{what} needs {count} bytes, {len(self.frame) - start} left")
+            self.frame += bytes(start + count - len(self.frame))
         self.pos += count
         return start
 
@@ -197,10 +209,13 @@ class _Reader:
         start = self.take(4, f"{path} length")
         self.mark(start, f"{path}.length", "uint32", "length")
         (n,) = struct.unpack_from("<I", self.frame, start)
-        need = n * min_size(self.edition, ftype)
-        if need > len(self.frame) - self.pos:
-            raise FrameError("length-overrun", start, f"{path} claims {n} elements ({need} bytes at least), "
-                                                      f"{len(self.frame) - self.pos} bytes left")
+        element = min_size(self.edition, ftype)
+        left = len(self.frame) - self.pos
+        if n * element > left:
+            if "length-overrun" not in self.off:
+                raise FrameError("length-overrun", start, f"{path} claims {n} elements ({n * element} bytes at least), "
+                                                          f"{left} bytes left")
+            n = left // element if element else 0
         return n
 
     def value(self, ftype: FieldType, path: str):

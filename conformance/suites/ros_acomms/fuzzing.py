@@ -20,13 +20,13 @@ from ...kinds.vector.errors import EncodeError, FrameError
 from ...kinds.vector.floats import FLOAT_CLASSES
 from . import codec
 from .codec import int_bounds, int_form
+from .corpus.rules import outcomes
 from .definitions import PRIMITIVES, Edition, FieldType
 from .msgtext import md5
 
 ENC = "ros1"
 MAX_TEXT = 200
 MAX_ARRAY = 6
-ACCEPT_OR_REJECT = [{"outcome": "accept"}, {"outcome": "reject"}]
 MUTATIONS = ("bit-flip", "truncate", "extend", "length-past-data", "byte-set")
 SECOND = 1_000_000_000
 
@@ -129,9 +129,11 @@ class RosFuzzSource:
         if any(isinstance(v, dict) and set(v) == {"hex"} for v in _values(decoded)):
             reasons.append("non-utf8")
         if reasons:
+            permitted = list(dict.fromkeys(o["outcome"] for r in reasons for o in outcomes(r)))
             return self.record(group, "acceptable", "ros-acomms#ros-1-serialization", [f"decode-{ENC}"],
                                ["acceptable", *reasons, *tags, *self.tags(decoded)], frame, decoded,
-                               outcomes=ACCEPT_OR_REJECT, reference="accept")
+                               outcomes=[{"outcome": o} for o in permitted], reference="accept",
+                               **{"class": reasons[0] if len(reasons) == 1 else reasons})
         return self.record(group, "valid", self.view[full].definition.clause, [f"decode-{ENC}", "roundtrip"],
                            ["valid", *tags, *self.tags(decoded)], frame, decoded)
 

@@ -134,6 +134,8 @@ class WrapsIntegers(Reference):
     """Encodes an integer its field cannot hold modulo the field's width instead of refusing it."""
 
     name = "wraps-integers"
+    equivalent = ("the ROS 1 documentation does not say an encoder must refuse such a value: writing its low-order bits "
+                  "is a permitted outcome (class value-out-of-type, truncate)")
 
     def encode(self, suite, message, encoding):
         return super().encode(suite, wrap(self.view, message), encoding)

@@ -9,6 +9,7 @@ from pathlib import Path
 from ...core.suite import BuiltinAdapter, Group
 from ...paths import VECTORS
 from . import codec, forms
+from ...kinds.vector.texts import lossy_match
 from .definitions import DefinitionError, RosDefinitions, load_definitions, parse_definitions
 from .msgtext import expected_types, parse_full_text, text_differences
 from ..data_suite import DataSuite, read_data_file
@@ -57,6 +58,18 @@ class RosCodec:
         except DefinitionError as exc:
             return out + [f"the definition text does not parse: {exc}"]
         return out + text_differences(expected_types(view, view[case["type"]]), described)
+
+    def decode(self, frame: bytes, encoding: str, case: dict, edition: str) -> dict:
+        return codec.decode(self.defs.edition(edition), case["type"], frame)
+
+    def tolerates(self, outcome: str, op: str, difference) -> bool:
+        """lossy (decoding, or a roundtrip): a string whose bytes that are not UTF-8 were replaced (texts.lossy_match)."""
+        if outcome == "lossy" and op != "encode" and difference.why == "string" and isinstance(difference.actual, str):
+            try:
+                return lossy_match(codec.string_bytes(difference.expected), difference.actual)
+            except ValueError:
+                return False
+        return False
 
 
 class RosSuite(DataSuite):
@@ -131,8 +144,9 @@ class RosSuite(DataSuite):
                 return ".type", f"{case['type']} is not a type of edition {name}"
             if case["md5"] != md5(view, view[case["type"]]):
                 return ".md5", f"{case['md5']} is not the MD5 of {case['type']} in edition {name}: the definition changed"
-            if "message" in case:  # an encoder input that must be refused may hold what its field cannot carry
-                problem = forms.message_problem(view, case["message"], strict=True, in_range="rule" not in case)
+            if "message" in case:  # an input only an encoder is given may hold what its field cannot carry
+                decoded = any(check.startswith(("decode", "roundtrip")) for check in case["checks"])
+                problem = forms.message_problem(view, case["message"], strict=True, in_range=decoded)
                 if problem:
                     return ".message" + problem[0], f"{problem[1]} (edition {name})"
         return None

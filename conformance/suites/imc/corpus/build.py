@@ -1,8 +1,10 @@
 """Rebuild the IMC corpus: one vector file per message, the coverage table, deterministically.
 
 ``imc-conformance generate`` (or ``python -m imc_conformance.suites.imc.corpus.build``) writes
-``vectors/imc/cases/*.json``, ``vectors/imc/coverage.md`` and the behavioural coverage of the live cases,
-``vectors/imc/behaviour-coverage.md``; ``--check`` only reports drift.
+``vectors/imc/cases/*.json``, ``vectors/imc/coverage.md``, the provenance of every rule and class
+(``vectors/imc/provenance.md``) and the behavioural coverage of the live cases, ``vectors/imc/behaviour-coverage.md``;
+``--check`` only reports drift. Both first prove the corpus: the lint of its rules' sources and the one-flaw oracle
+(``oracle.py``); a corpus that fails them is not written.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown,
 from ....fuzz import promote
 from ....fuzz.promote import promoted_cases
 from ....inputs import read_bytes
+from ....kinds.vector.provenance import case_documents, proven, provenance_markdown
 from ....limits import XML_LIMIT
 from ..definitions import Definitions, lint_definitions, load_definitions, parse_definitions
 from ..fuzzing import ImcFuzzSource
@@ -26,6 +29,7 @@ from ..paths import imc_data
 from .acceptable import add_acceptable
 from .coverage import coverage_markdown
 from .invalid import add_invalid
+from .oracle import corpus_problems
 from .records import MessageCases
 from .valid import add_valid
 
@@ -46,6 +50,7 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
     promoted = promoted_cases(promote.read(imc_data("promoted.json"), "imc"), {
         e: ImcFuzzSource(defs, e, {r["id"]: r["clause"] for r in load_suite("imc").rules}) for e in defs.editions})
     files = message_files(defs, examples, promoted)
+    files["provenance.md"] = provenance_markdown("IMC", rules_document(), case_documents(files))
     statements = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))["statements"]
     register = json.loads(imc_data("ambiguities.json").read_text(encoding="utf-8"))["ambiguities"]
     files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()), register)
@@ -88,6 +93,10 @@ def message_files(defs: Definitions, examples: dict[str, list[dict]] | None = No
     return files
 
 
+def rules_document() -> dict:
+    return json.loads(imc_data("rules.json").read_text(encoding="utf-8"))
+
+
 def folder_from_xml(source: Path, out: Path) -> int:
     """Write a suite folder for the IMC.xml at ``source`` into ``out``: its definitions.json, a case file for every
     message and the coverage table (``run --vectors out`` runs it); ValueError for an XML the suite cannot read."""
@@ -120,6 +129,8 @@ def main(argv: list[str] | None = None) -> int:
     for problem in lint_definitions(defs):  # reported, never "fixed": such values become acceptable encode cases
         print(f"definitions: {problem}")
     files = build_corpus(defs)
+    if not proven(rules_document(), files, lambda documents: corpus_problems(defs, documents)):
+        return 1  # a corpus the lint or the oracle refuses is not written
     return write_generated(load_suite("imc"), files, args.check, "vectors/imc")
 
 

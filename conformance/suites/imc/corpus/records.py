@@ -6,6 +6,7 @@ from .. import codec
 from ..definitions import Definitions, MessageDef
 
 ALL_CHECKS = ["encode-le", "encode-be", "decode-le", "decode-be", "roundtrip"]
+HEADER_FIELDS = {"timestamp", "src", "src_ent", "dst", "dst_ent"}
 
 
 def used_abbrevs(value, found: set[str]) -> set[str]:
@@ -35,6 +36,8 @@ class MessageCases:
         if case_id in self._ids:
             raise ValueError(f"duplicate case id {case_id}")
         self._ids.add(case_id)
+        if message is not None and set(message.get("header", {})) != HEADER_FIELDS:
+            raise ValueError(f"{case_id}: the message must give every header field (an encoder's defaults are its own)")
         uses = used_abbrevs(message, {self.mdef.abbrev}) if message else {self.mdef.abbrev}
         record = {"id": case_id, "expect": expect, "clause": clause,
                   "definitions": {a: self.defs[a].hash for a in sorted(uses) if a in self.defs.by_abbrev},

@@ -7,6 +7,9 @@ import struct
 
 from ..definitions import Definitions, FieldDef, MessageDef
 
+# The header of the corpus's ordinary frames (invalid and acceptable ones, promoted findings): every field given,
+# none of them a value a case is about (a zero or -0.0 timestamp, a null address).
+ORDINARY_HEADER = {"timestamp": 1700000000.5, "src": 0x001E, "src_ent": 42, "dst": 0x4101, "dst_ent": 7}
 # Distinctive, in-range values by integer type (bytes that are easy to spot in a hex dump).
 FILLED_INTS = {"uint8_t": 42, "int8_t": -5, "uint16_t": 4660, "int16_t": -1234, "uint32_t": 305419896,
                "int32_t": -123456, "int64_t": -1234567890123}

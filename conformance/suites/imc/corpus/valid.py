@@ -18,6 +18,10 @@ HEADER_VARIANTS = {
     "far-future-timestamp": {"timestamp": 4102444800.0},
     "system-entity": {"src": 0x001E, "src_ent": 0, "dst": 0x4101, "dst_ent": 0},
 }
+# Zero timestamps: decoding them has no freedom; an encoder may write them or stamp the time of sending (class
+# zero-timestamp), so their encode and roundtrip checks are acceptable cases of their own.
+ZERO_TIMESTAMPS = ("zero", "negative-zero-timestamp")
+DECODE_CHECKS = ["decode-le", "decode-be"]
 PRINTABLE = "".join(chr(c) for c in range(0x20, 0x7F))
 CONTROL = "".join(chr(c) for c in (0x00, 0x09, 0x0A, 0x0D, 0x1B, 0x7F))
 
@@ -32,12 +36,13 @@ def add_valid(mc: MessageCases, examples: list[dict]) -> None:
     defs, mdef = mc.defs, mc.mdef
     minimal = samples.message(mdef.abbrev, samples.default_fields(mdef))
 
-    def valid(path: str, message: dict, clause: str, tags: list[str], expect="valid", **extra):
+    def valid(path: str, message: dict, clause: str, tags: list[str], expect="valid", checks=ALL_CHECKS, **extra):
         if isinstance(expect, dict) and "acceptable" in expect.values():
             # valid in one edition, out of the table (implementation-defined) in another
-            extra.update(outcomes=[{"outcome": "accept"}, {"outcome": "reject"}], reference="accept")
+            extra.update(outcomes=[{"outcome": "accept"}, {"outcome": "reject"}], reference="accept",
+                         **{"class": "out-of-range" if "out-of-range" in tags else "enum-out-of-table"})
         canonical, frames = mc.both_orders(message)
-        return mc.add(path, expect=expect, clause=clause, checks=ALL_CHECKS, tags=["valid", *tags],
+        return mc.add(path, expect=expect, clause=clause, checks=checks, tags=["valid", *tags],
                       frames=frames, message=canonical, **extra)
 
     valid("minimal", minimal, mdef.clause, ["minimal", "defaults"])
@@ -47,7 +52,17 @@ def add_valid(mc: MessageCases, examples: list[dict]) -> None:
             raise ValueError(f"example {mdef.abbrev}/{example['name']} is not in canonical form: {canonical}")
         valid(f"realistic/{example['name']}", example["message"], example["source"], ["realistic"])
     for name, header in HEADER_VARIANTS.items():
-        valid(f"header/{name}", dict(minimal, header=header), "imc-wire#frame-layout", ["header"])
+        if name not in ZERO_TIMESTAMPS:
+            valid(f"header/{name}", dict(minimal, header=header), "imc-wire#frame-layout", ["header"])
+            continue
+        valid(f"header/{name}/decode", dict(minimal, header=header), "imc-wire#frame-layout", ["header"],
+              checks=DECODE_CHECKS)
+        canonical, frames = mc.both_orders(dict(minimal, header=header))
+        mc.add(f"header/{name}/encode", expect="acceptable", clause="imc-xml#header.timestamp",
+               checks=["encode-le", "encode-be", "roundtrip"], tags=["acceptable", "header", "zero-timestamp"],
+               frames=frames, message=canonical, outcomes=[{"outcome": "accept"}, {"outcome": "restamp"}],
+               reference="accept", **{"class": "zero-timestamp"},
+               comment="A zero timestamp given to an encoder: written as given (DUNE, imcpy), or the time of sending.")
     filled = samples.message(mdef.abbrev, samples.filled_fields(defs, mdef))
     if mdef.fields:
         valid("filled", filled, mdef.clause, ["filled"])

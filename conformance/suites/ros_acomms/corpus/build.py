@@ -1,8 +1,9 @@
 """Rebuild the ros_acomms corpus: one vector file per type, and the coverage table, deterministically.
 
-``imc-conformance generate --suite ros_acomms`` writes ``vectors/ros_acomms/cases/*.json`` and
-``vectors/ros_acomms/coverage.md`` and the behavioural coverage of its scenarios,
-``vectors/ros_acomms/behaviour-coverage.md``; ``--check`` only reports drift. A type whose definition is the same in
+``imc-conformance generate --suite ros_acomms`` writes ``vectors/ros_acomms/cases/*.json``,
+``vectors/ros_acomms/coverage.md``, the provenance of every rule and class (``provenance.md``) and the behavioural
+coverage of its scenarios, ``vectors/ros_acomms/behaviour-coverage.md``; ``--check`` only reports drift. Both first
+prove the corpus (the lint of its rules' sources, the one-flaw oracle); a corpus that fails them is not written. A type whose definition is the same in
 every edition it exists in has one set of cases; otherwise each edition gets its own, under an id segment
 naming the edition (``ros_acomms/SST/9.0.0/...``).
 """
@@ -19,6 +20,7 @@ from collections import Counter, defaultdict
 from ....fuzz import promote
 from ....fuzz.promote import promoted_cases
 from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
+from ....kinds.vector.provenance import case_documents, proven, provenance_markdown
 from .. import codec
 from ..definitions import PRIMITIVES, Edition, FieldType, Message, RosDefinitions, TypeDef, load_definitions
 from ..fuzzing import RosFuzzSource
@@ -27,19 +29,29 @@ from ... import load_suite
 from ...data_suite import write_generated
 from ..paths import ros_data
 from . import values
+from .oracle import corpus_problems, flaws
+from .rules import klass, outcomes, rules_document
 
 FORMAT_VERSION = 1
 ENC = "ros1"
 CODEC = [f"encode-{ENC}", f"decode-{ENC}", "roundtrip"]
 DECODE = [f"decode-{ENC}"]
-ACCEPT_OR_REJECT = [{"outcome": "accept"}, {"outcome": "reject"}]
+# Why an invalid case breaks more rules than its own (flaws.why, by family).
+WHY = {
+    "truncated": "The bytes end inside a field: the fields after it are missing too.",
+    "length-overrun": "A length reaching past the bytes left leaves none for the fields after it.",
+}
 SERIALIZATION = "ros-acomms#ros-1-serialization"
 CHECKSUMS = "ros-acomms#ros-1-md5-checksums"
 MIN_VALID = 4
 
 
 def load_rules() -> list[dict]:
-    return json.loads(ros_data("rules.json").read_text(encoding="utf-8"))["rules"]
+    return rules_document()["rules"]
+
+
+def reference_of(name: str) -> str:
+    return klass(name)["reference"]
 
 
 def load_examples() -> dict[str, list[dict]]:
@@ -160,8 +172,11 @@ def add_invalid(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Messa
             rule = exc.rule
         else:
             raise ValueError(f"{full}: {path} decodes, but is meant to break a rule")
+        found = flaws(edition, full, broken, rule)
+        broke = {"rules": found, "why": WHY[path.split("/")[0]]} if len(found) > 1 else None
         tc.add(prefix + path, expect=expect("invalid"), clause=tc.clauses[rule], checks=DECODE, edition=edition,
-               frame=broken, rule=rule, tags=["invalid", f"rule:{rule}", *tags, *(["final-blob"] if at_final else [])])
+               frame=broken, rule=rule, flaws=broke,
+               tags=["invalid", f"rule:{rule}", *tags, *(["final-blob"] if at_final else [])])
 
     cuts = {0: "empty"}
     for s in spans:
@@ -183,20 +198,39 @@ def add_invalid(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Messa
             # a length whose byte count (element size x length) is 2^32: 0 in a reader computing it in 32 bits
             invalid(f"length-overrun/{owner}/wraps", patch_u32(frame, s.start, 2 ** 32 // element),
                     ["class:wrapping-length"], at_final)
+    add_encoder_choices(tc, edition, prefix, expect, msg, canonical_filled)
+
+
+def add_encoder_choices(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Message, filled: dict) -> None:
+    """What an encoder is given that its type cannot carry: a fixed-length array of another length, an integer out of
+    its type. Refusing is the reference's choice, not the documentation's: each is an implementation-defined class
+    whose outcomes give the frames an encoder that writes something else may write."""
     for f in msg.fields:
         if f.type.array is not None and f.type.array >= 0:
-            for name, size in (("short", f.type.array - 1), ("long", f.type.array + 1)):
-                value = [values.filled(edition, f.type.element)] * size if f.type.base != "uint8" else "a5" * size
-                tc.add(f"{prefix}fixed-array-length/{f.name}/{name}", expect=expect("invalid"),
+            n = f.type.array
+            element = values.filled(edition, f.type.element) if f.type.base != "uint8" else "a5"
+            default = values.default(edition, f.type.element) if f.type.base != "uint8" else "00"
+            for name, size in (("short", n - 1), ("long", n + 1)):
+                given = [element] * size if f.type.base != "uint8" else element * size
+                resized = (given[:n] if size > n else given + [default] * (n - size)) if f.type.base != "uint8" else (
+                    given[:2 * n] if size > n else given + default * (n - size))
+                tc.add(f"{prefix}fixed-array-length/{f.name}/{name}", expect=expect("acceptable"),
                        clause=tc.clauses["fixed-array-length"], checks=[f"encode-{ENC}"], edition=edition,
-                       message=with_field(canonical_filled, f.name, value), rule="fixed-array-length",
-                       tags=["invalid", "rule:fixed-array-length", f"field:{f.name}"])
+                       message=with_field(filled, f.name, given), reference=reference_of("fixed-array-length"),
+                       outcomes=outcomes("fixed-array-length", resize=codec.encode(edition, with_field(filled, f.name, resized))),
+                       tags=["acceptable", "fixed-array-length", f"field:{f.name}"], **{"class": "fixed-array-length"},
+                       comment=f"{size} elements for {f.type.text('')}: refuse, or write exactly {n}; never {size}.")
         elif f.type.array is None and f.type.base in values.FILLED_INTS:
-            too_big = codec.int_bounds(f.type.base)[1] + 1
-            tc.add(f"{prefix}value-out-of-type/{f.name}", expect=expect("invalid"),
+            lo, hi = codec.int_bounds(f.type.base)
+            wrapped = lo if lo < 0 else 0  # hi + 1, its low-order bits in two's complement
+            frames = {name: codec.encode(edition, with_field(filled, f.name, codec.int_form(value)))
+                      for name, value in (("truncate", wrapped), ("saturate", hi))}
+            tc.add(f"{prefix}value-out-of-type/{f.name}", expect=expect("acceptable"),
                    clause=tc.clauses["value-out-of-type"], checks=[f"encode-{ENC}"], edition=edition,
-                   message=with_field(canonical_filled, f.name, codec.int_form(too_big)), rule="value-out-of-type",
-                   tags=["invalid", "rule:value-out-of-type", f"field:{f.name}"])
+                   message=with_field(filled, f.name, codec.int_form(hi + 1)), reference=reference_of("value-out-of-type"),
+                   outcomes=outcomes("value-out-of-type", **frames), **{"class": "value-out-of-type"},
+                   tags=["acceptable", "value-out-of-type", f"field:{f.name}"],
+                   comment=f"{hi + 1} in a {f.type.base}: refuse, write its low-order bits ({wrapped}), or {hi}.")
 
 
 def final_blob_span(spans, length: int):
@@ -226,11 +260,13 @@ def add_acceptable(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Me
     canonical_filled, frame = canonical(edition, filled)
     receivers = SERIALIZATION
 
-    def acceptable(path, broken: bytes, message: dict, tags, outcomes=ACCEPT_OR_REJECT, reference="accept", **extra):
+    def acceptable(path, klass, broken: bytes, message: dict, tags, **extra):
+        extra.setdefault("outcomes", outcomes(klass))
         tc.add(prefix + path, expect=expect("acceptable"), clause=receivers, checks=DECODE, edition=edition,
-               frame=broken, message=message, outcomes=outcomes, reference=reference, tags=["acceptable", *tags], **extra)
+               frame=broken, message=message, reference=reference_of(klass), tags=["acceptable", *tags],
+               **{"class": klass}, **extra)
 
-    acceptable("trailing-bytes", frame + b"\x00\x11\x22", canonical_filled, ["trailing-bytes"],
+    acceptable("trailing-bytes", "trailing-bytes", frame + b"\x00\x11\x22", canonical_filled, ["trailing-bytes"],
                comment="Three bytes follow the message; genpy ignores them, rosbags refuses them.")
     spans = {s.path: s for s in codec.layout(edition, msg.full, frame)}
     for f in msg.fields:
@@ -238,18 +274,19 @@ def add_acceptable(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Me
             continue
         span = spans[f"{msg.name}.{f.name}"]
         if f.type.base == "bool":
-            acceptable(f"bool-byte/{f.name}", frame[:span.start] + b"\x02" + frame[span.end:], canonical_filled,
+            acceptable(f"bool-byte/{f.name}", "bool-byte", frame[:span.start] + b"\x02" + frame[span.end:], canonical_filled,
                        ["bool", f"field:{f.name}"], comment="A bool byte that is neither 0 nor 1: read as true, or refused.")
         elif f.type.base == "string":
             message = with_field(canonical_filled, f.name, {"hex": "fffec3"})
-            acceptable(f"non-utf8/{f.name}", codec.encode(edition, message), message, ["string", f"field:{f.name}"],
-                       comment="String bytes that are not UTF-8: ROS 1 strings are bytes, so keep them (as hex), or refuse.")
+            acceptable(f"non-utf8/{f.name}", "non-utf8", codec.encode(edition, message), message, ["string", f"field:{f.name}"],
+                       comment="String bytes that are not UTF-8: ROS 1 strings are bytes, so keep them (as hex), refuse "
+                               "them, or replace them (lossy).")
         elif f.type.base == "time":
             late = with_field(canonical_filled, f.name, {"secs": 1700000000, "nsecs": 1500000000})
             normal = with_field(canonical_filled, f.name, {"secs": 1700000001, "nsecs": 500000000})
-            acceptable(f"time-nsecs-over/{f.name}", codec.encode(edition, late), late, ["time", f"field:{f.name}"],
+            acceptable(f"time-nsecs-over/{f.name}", "time-nsecs-over", codec.encode(edition, late), late,
+                       ["time", f"field:{f.name}"],
                        outcomes=[{"outcome": "accept"}, {"outcome": "normalize", "message": normal}, {"outcome": "reject"}],
-                       reference="normalize",
                        comment="nsecs of a second and a half: keep it, carry it into secs (genpy's canon()), or refuse.")
 
 
@@ -271,6 +308,7 @@ def build_corpus(defs: RosDefinitions) -> dict[str, str]:
                "editions": [e for e in defs.editions if t.in_edition(e)], "cases": cases}
         files[f"cases/{t.name}.json"] = json.dumps(doc, indent=1, ensure_ascii=True) + "\n"
     files["coverage.md"] = coverage_markdown(defs, rules, per_type)
+    files["provenance.md"] = provenance_markdown("ros_acomms", rules_document(), case_documents(files))
     statements = json.loads(ros_data("statements.json").read_text(encoding="utf-8"))["statements"]
     files["behaviour-coverage.md"] = behaviour_markdown("ros_acomms", statements, live_cases(ros_data()))
     return files
@@ -300,7 +338,7 @@ def coverage_markdown(defs: RosDefinitions, rules: list[dict], per_type: dict[Ty
              "vectors; do not edit.", "", "## Cases per type and rule", "",
              "Invalid cases per rule; `n/a`: the rule cannot apply to the type. Types differing between editions have "
              "cases per edition.", ""]
-    shown = [r for r in rules if r["applies_to"] != "encoder"]
+    shown = [r for r in rules if r["level"] == "must"]
     head = ["type", "editions", "valid", "acceptable", "invalid", "definition"] + [r["id"] for r in shown]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for t, cases in per_type.items():
@@ -342,7 +380,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="imc-conformance generate --suite ros_acomms", description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="report files that differ from a fresh build; write nothing")
     args = parser.parse_args(argv)
-    files = build_corpus(load_definitions())
+    defs = load_definitions()
+    files = build_corpus(defs)
+    if not proven(rules_document(), files, lambda documents: corpus_problems(defs, documents)):
+        return 1  # a corpus the lint or the oracle refuses is not written
     return write_generated(load_suite("ros_acomms"), files, args.check, "vectors/ros_acomms")
 
 

@@ -1,0 +1,136 @@
+"""Where each verdict of a vector corpus comes from: the lint that keeps practice from deciding a FAIL, and the
+generated table of every rule and implementation-defined class with its source, level and cases (``provenance.md``).
+
+Suite-generic: it reads a suite's rules.json (``rules``, ``classes``) and its case files.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from typing import Callable
+
+LEVELS = {"must": "MUST (a FAIL when broken)", "practice": "practice (acceptable; held only by a profile)",
+          "refusal": "a refusal's name (no vector is invalid for it)"}
+
+
+def _expects(case: dict) -> set[str]:
+    expect = case["expect"]
+    return {expect} if isinstance(expect, str) else set(expect.values())
+
+
+def case_documents(files: dict[str, str]) -> list[dict]:
+    """The case files among a generator's files (relative path -> text)."""
+    return [json.loads(text) for name, text in files.items() if name.startswith("cases/")]
+
+
+def proven(rules_doc: dict, files: dict[str, str], oracle: Callable[[list[dict]], tuple[list[str], dict]]) -> bool:
+    """Whether a built corpus holds: the lint of its rules' sources and the suite's oracle over its case files
+    (``oracle(documents)``: problems, and counts of what was proven); prints what was proven and every problem."""
+    documents = case_documents(files)
+    problems = [f"provenance: {p}" for p in lint(rules_doc, documents)]
+    found, counts = oracle(documents)
+    practice = (f", {counts['practice']} cases about a rule of practice refused for it only where it is held"
+                if counts.get("practice") else "")
+    print(f"oracle: {counts['invalid']} invalid cases proven to break exactly the rules they name "
+          f"({counts['several flaws']} of them several, each with why){practice}; {len(found)} problems")
+    for problem in problems + [f"oracle: {p}" for p in found]:
+        print(problem)
+    return not problems and not found
+
+
+def lint(rules_doc: dict, documents: list[dict]) -> list[str]:
+    """Every case whose verdict rests on something rules.json does not vouch for: an invalid case breaking a rule that
+    is not a MUST of a normative source, a case about a practice that is not one, an acceptable case without a class
+    or with an outcome its class does not permit."""
+    rules = {r["id"]: r for r in rules_doc["rules"]}
+    classes = {c["id"]: c for c in rules_doc.get("classes", ())}
+    problems = [f"rule {r['id']}: level must, but its source is practice ({r['source']['document']})"
+                for r in rules.values() if r["level"] == "must" and r["source"]["kind"] == "practice"]
+    for doc in documents:
+        for case in doc["cases"]:
+            where = case["id"]
+            named = [case["rule"]] + case.get("flaws", {}).get("rules", []) if "rule" in case else []
+            for rule in named:
+                if rule not in rules:
+                    problems.append(f"{where}: rule {rule} is not in rules.json")
+                elif rules[rule]["level"] != "must":
+                    problems.append(f"{where}: invalid for {rule}, a rule of {rules[rule]['level']}, not a MUST")
+            if "practice" in case and rules.get(case["practice"], {}).get("level") != "practice":
+                problems.append(f"{where}: about the practice {case['practice']}, which is not a rule of practice")
+            if "outcomes" in case:
+                named = case.get("class")
+                named = named if isinstance(named, list) else [named]
+                unknown = [n for n in named if n not in classes]
+                if unknown:
+                    problems.append(f"{where}: acceptable, but its class {unknown[0]!r} is not in rules.json")
+                    continue
+                extra = {o["outcome"] for o in case["outcomes"]} - {o for n in named for o in classes[n]["outcomes"]}
+                if extra:
+                    problems.append(f"{where}: outcome {', '.join(sorted(extra))} is not one class {', '.join(named)} permits")
+    return problems
+
+
+def provenance_markdown(title: str, rules_doc: dict, documents: list[dict]) -> str:
+    """The table of every rule and class of the suite: its level, its source (quoted) and how many cases rest on it."""
+    invalid, held, flawed, by_class = Counter(), Counter(), Counter(), Counter()
+    for doc in documents:
+        for case in doc["cases"]:
+            if "rule" in case:
+                invalid[case["rule"]] += 1
+                for rule in case.get("flaws", {}).get("rules", [])[1:]:
+                    flawed[rule] += 1
+            if "practice" in case:
+                held[case["practice"]] += 1
+            for name in ([case["class"]] if isinstance(case.get("class"), str) else case.get("class", ())):
+                by_class[name] += 1
+    lines = [f"# {title}: where every rule and implementation-defined class comes from", "",
+             "Generated by `imc-conformance generate` from rules.json and the case files; do not edit.", "",
+             "Only a rule of level MUST, resting on the seeds or the protocol's own documentation, makes a FAIL. A rule "
+             "resting on one implementation's practice never does: its cases are acceptable, recording what an "
+             "implementation did, unless a profile holds the implementation to it (`--profile`). `generate --check` "
+             "refuses a MUST without a normative source and proves every invalid case by the oracle: the reference "
+             "refuses it for its rule, and accepts it once the rules it breaks are switched off.", "",
+             "## Rules", "",
+             "| rule | level | source | quoted | invalid cases | also broken by | practice cases |",
+             "|---|---|---|---|---:|---:|---:|"]
+    for r in rules_doc["rules"]:
+        lines.append(f"| `{r['id']}` | {LEVELS[r['level']]} | {_source(r['source'])} | {_quotes(r['source'])} | "
+                     f"{invalid[r['id']]} | {flawed[r['id']]} | {held[r['id']]} |")
+    lines += ["", "'also broken by': invalid cases that break this rule besides the one they name (their `flaws`, each "
+              "with why it cannot be made to break one rule).", "",
+              "## Implementation-defined classes", "",
+              "| class | outcomes | reference | source | quoted | cases |", "|---|---|---|---|---|---:|"]
+    for c in rules_doc.get("classes", ()):
+        lines.append(f"| `{c['id']}` | {', '.join(c['outcomes'])} | {c['reference']} | {_source(c['source'])} | "
+                     f"{_quotes(c['source'])} | {by_class[c['id']]} |")
+    lines += ["", "What each class is:", ""]
+    lines += [f"- `{c['id']}`: {c['description']}" for c in rules_doc.get("classes", ())]
+    return "\n".join(lines) + "\n"
+
+
+def _source(source: dict) -> str:
+    label = {"imc-xml": "IMC.xml (LSTS's IMC documentation)", "practice": f"the practice of {source['document']}"}
+    return _cell(f"{label.get(source['kind'], source['document'])}: {source['where']}")
+
+
+def _quotes(source: dict) -> str:
+    text = " / ".join(f"“{q}”" for q in source["quotes"])
+    return _cell(text + (f" ({source['note']})" if "note" in source else ""))
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def held(data: dict, practices: frozenset[str]) -> dict:
+    """A case as a profile holding ``practices`` judges it: one about a held rule of practice is invalid for that rule
+    (in every edition it has), with no outcomes; any other case is as it is."""
+    rule = data.get("practice")
+    if rule not in practices or "outcomes" not in data:  # an invalid case stays invalid for its own rule
+        return data
+    out = {k: v for k, v in data.items() if k not in ("outcomes", "reference", "class", "practice")}
+    expect = data["expect"]
+    out["expect"] = "invalid" if isinstance(expect, str) else {edition: "invalid" for edition in expect}
+    out["rule"] = rule
+    return out
