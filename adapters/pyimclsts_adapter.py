@@ -32,8 +32,9 @@ Quirks observed (each pinned in tests/test_pyimclsts_adapter.py):
 - Assignment enforces enum membership (``ValueError: 7 is not a valid LblConfig.OP``) and the XML's
   min/max, on encode and, since ``unpack`` assigns too, on decode. Bitfields are ``IntFlag`` and take any
   value, a negative one silently becoming the set of known flags (-1 -> 3 for AnnounceService).
-  Integer ranges are checked only by ``struct`` in ``pack``, a refusal the adapter names no rule for (the same
-  error stands for a value out of its type and for a length or count over 65535); ``bool`` passes as ``int``.
+  Integer ranges are checked only by ``struct`` in ``pack``: the adapter names that refusal ``value-out-of-type``
+  where a value given is out of its type, and no rule where it is a length or count over 65535 (the same error);
+  ``bool`` passes as ``int``.
 - A message-list element cannot be null: assigning ``None`` in a list raises ``ValueError``; decoding a
   null id (65535) in a list raises ``KeyError``. A null inline message is the unassigned field.
 - An inline message field left out of ``fields`` packs as null (no missing-field refusal).
@@ -69,6 +70,7 @@ from imc_conformance.suites.imc.values import text_value
 PACKAGE = "pyimc_generated"  # fixed by pyimclsts.extract (_target_folder) and pyimclsts.network (_module_name)
 VERSION = importlib.metadata.version("pyimclsts")
 _MARKER = "generation.json"
+_HEADER_TOPS = {"src": 0xFFFF, "src_ent": 0xFF, "dst": 0xFFFF, "dst_ent": 0xFF}  # the header's integers
 _FLOATS = {"fp32_t": (4, struct.Struct("<f"), struct.Struct("<I")),
            "fp64_t": (8, struct.Struct("<d"), struct.Struct("<Q"))}
 
@@ -255,9 +257,29 @@ class PyimclstsAdapter:
                                         header["src_ent"], header["dst"], header["dst_ent"])
         try:
             return obj.pack(is_big_endian=byte_order == "be")
-        except Exception as exc:  # the field values were checked as they were set: a length, count or size that
-            # pyimclsts cannot pack is no check of its own, so no rule is named
-            raise Rejected(f"{abbrev}: pack: {type(exc).__name__}: {exc}") from exc
+        except Exception as exc:  # struct's range check is pyimclsts's only one: it names value-out-of-type where a
+            # value given is out of its type, and no rule where a length or count overflows (payload-overflow is no
+            # check of pyimclsts's own)
+            raise Rejected(f"{abbrev}: pack: {type(exc).__name__}: {exc}",
+                           "value-out-of-type" if self._out_of_type(message) else None) from exc
+
+    def _out_of_type(self, message: dict) -> bool:
+        """Whether a header value or a field value (inline messages included) is an integer its type cannot hold."""
+        header = message.get("header", {})
+        if any(isinstance(header.get(k), int) and not 0 <= header[k] <= top for k, top in _HEADER_TOPS.items()):
+            return True
+        stack = [message]
+        while stack:
+            m = stack.pop()
+            conv = self._converter(m.get("abbrev")) if isinstance(m, dict) else None
+            for name, value in (m.get("fields", {}).items() if conv is not None else ()):
+                field = conv.by_name.get(name)
+                if field is None:
+                    continue
+                if field.rule_for(value):
+                    return True
+                stack += [v for v in (value if isinstance(value, list) else [value]) if isinstance(v, dict)]
+        return False
 
     def _build(self, abbrev, fields: dict, where: str):
         """A pyimclsts message object with ``fields`` assigned through its attributes."""

@@ -17,7 +17,8 @@ names and types come from ``vectors/imc/definitions.json`` (or ``--definitions``
 through pyimclsts's attributes (which check types, enums and ranges) and read from its ``_<field>``
 slots (the attributes deep-copy message values, which fails); ``{"hex"}`` plaintext travels as
 surrogate-escaped ASCII as pyimclsts does; decode errors naming a CRC or the sync are ``crc``/``sync``,
-``struct`` errors on pack name no rule (pyimclsts packs values, lengths and counts without a check of its own). Floats are answered at their width, with
+``struct`` range errors on pack are ``value-out-of-type`` where a value given is out of its type, and name no
+rule where a length or count overflows. Floats are answered at their width, with
 ``nan``/``inf``/``-inf``, ``-0.0`` and NaN payloads kept.
 """
 
@@ -190,9 +191,29 @@ class PyimclstsShim:
                                        header["src_ent"], header["dst"], header["dst_ent"])
         try:
             return obj.pack(is_big_endian=byte_order == "be")
-        except Exception as exc:  # the field values were checked as they were set: a length, count or size that
-            # pyimclsts cannot pack is no check of its own, so no rule is named
-            raise Refused(f"{abbrev}: pack: {type(exc).__name__}: {exc}") from exc
+        except Exception as exc:  # struct's range check: value-out-of-type for a value given out of its type, no rule
+            # for a length or count over 65535
+            raise Refused(f"{abbrev}: pack: {type(exc).__name__}: {exc}",
+                          "value-out-of-type" if self.holds_out_of_type(message) else None) from exc
+
+    def holds_out_of_type(self, message: dict) -> bool:
+        """Whether an integer of the header or of any field, inline messages included, does not fit its type."""
+        header = message.get("header", {})
+        tops = {"src": 0xFFFF, "src_ent": 0xFF, "dst": 0xFFFF, "dst_ent": 0xFF}
+        if any(isinstance(header.get(name), int) and not 0 <= header[name] <= top for name, top in tops.items()):
+            return True
+        pending = [message]
+        while pending:
+            current = pending.pop()
+            conv = self.converters.get(current.get("abbrev")) if isinstance(current, dict) else None
+            if conv is None:
+                continue
+            for name, value in current.get("fields", {}).items():
+                field = conv.by_name.get(name)
+                if field is not None and field.rule_for(value):
+                    return True
+                pending += [v for v in (value if isinstance(value, list) else [value]) if isinstance(v, dict)]
+        return False
 
     def build(self, abbrev, fields: dict, where: str):
         """A pyimclsts message object with ``fields`` assigned through its attributes."""
