@@ -9,52 +9,19 @@ remembered per file content in the cache folder, since over a whole corpus it ta
 from __future__ import annotations
 
 import datetime as dt
-import json
 from functools import cache
 from pathlib import Path
 
 from . import inputs
-from .cache import remembered
 from .errors import CorpusError
 from .core.cases import Case
 from .core.results import SCHEMAS, RunResult, format_version
 from .core.suite import Suite
 from .core.waivers import Waiver, WaiverError, waivers_in_force
 from .paths import VECTORS
+from .schemas import schema_error
 from .suites import load_suite
 from .suites.data_suite import manifest, read_document
-
-
-@cache
-def validator(schema: Path):
-    """The schema's bytes and its validator (jsonschema is imported here: only a run that validates pays for it)."""
-    from jsonschema import Draft202012Validator
-
-    raw = schema.read_bytes()
-    return raw, Draft202012Validator(json.loads(raw))
-
-
-def schema_error(schema: Path, doc, where: str, memo: bytes | None = None) -> str | None:
-    """``<where>: <JSON path>: <problem>`` for the first schema problem of ``doc``, or None. With ``memo`` (the
-    file's bytes), a document already found valid is not checked again."""
-    raw, check = validator(schema)
-    known, record = remembered(schema.name, raw, memo) if memo is not None else (False, lambda: None)
-    if known:
-        return None
-    from jsonschema.exceptions import best_match
-
-    try:
-        error = best_match(check.iter_errors(doc))
-    except RecursionError:
-        return f"{where}: " * bool(where) + "nested too deeply to check"
-    if error is None:
-        record()
-        return None
-    return f"{where}: " * bool(where) + f"{error.json_path}: {shorten(error.message)}"
-
-
-def shorten(text: str, limit: int = 240) -> str:
-    return text if len(text) <= limit else text[:limit] + "..."
 
 
 def read_json(path: Path, error=ValueError):

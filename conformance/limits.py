@@ -8,6 +8,7 @@ from .core.shards import SHARDS_MAX  # shards a selection may be split into (--s
 
 STARTUP_MAX = 3600.0  # seconds a live run waits for its target to show itself
 TIME_SCALE_MAX = 1000.0  # the factor on a live run's time bounds (--time-scale)
+UNIQUE_SPAN = 0xFFF0  # a live run's unique numbers (request ids) cycle through 1..UNIQUE_SPAN
 FILE_LIMIT = 256 << 20  # bytes of a JSON or text file the suite reads (claims, waivers, results, corpus files)
 PIPE_LIMIT = 1 << 30  # bytes of a capture read from a pipe or a device
 NESTING_LIMIT = 64  # inline messages within inline messages that a decoder follows (the corpus needs 4)

@@ -9,7 +9,8 @@ import time
 from pathlib import Path
 
 from ..errors import UsageError
-from .options import DEFAULT_MEMORY_MB, add_reports, add_suite, add_target, count, megabytes, positive_seconds
+from ..arguments import count, megabytes, positive_seconds
+from .options import DEFAULT_MEMORY_MB, add_reports, add_suite, add_target
 
 DEFAULT_BUDGET = 100
 
@@ -70,7 +71,7 @@ def command(args) -> int:
     from ..render.terminal import print_result
     from ..core.hello import check_hello
     from .adapters import adapter_arguments, builtin_argv, open_session, split_command
-    from .options import chosen_edition
+    from ..arguments import chosen_edition
     from .output import report_targets, terminal, write_reports
 
     targets = report_targets(args)

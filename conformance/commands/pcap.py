@@ -10,7 +10,8 @@ from pathlib import Path
 
 from ..errors import UsageError
 from ..limits import PIPE_LIMIT
-from .options import add_adapter, add_judging, add_reports, address, count, offset_seconds
+from ..arguments import address, count, offset_seconds
+from .options import add_adapter, add_judging, add_reports
 
 
 def add(sub) -> None:

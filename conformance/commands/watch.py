@@ -14,7 +14,8 @@ import time
 from pathlib import Path
 
 from ..errors import UsageError
-from .options import add_judging, add_reports, address, positive_seconds
+from ..arguments import address, positive_seconds
+from .options import add_judging, add_reports
 
 REFRESH = 1.0  # seconds between redraws of the table
 SOL_PACKET, PACKET_STATISTICS = 263, 6  # linux/socket.h, linux/if_packet.h

@@ -39,8 +39,8 @@ def entry(finding, seed: int, adapters: list[str], edition: str, version: str, t
 def read(path: Path, suite: str) -> list[dict]:
     """The promoted records of ``path`` (none if it does not exist yet), checked against their schema; ValueError
     naming the problem if it is not a promoted-findings file of ``suite``."""
-    from ..files import schema_error
     from ..paths import VECTORS
+    from ..schemas import schema_error
 
     if not path.exists():
         return []

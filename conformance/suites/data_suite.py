@@ -60,8 +60,8 @@ def read_data_file(path: Path, schema: str | None, packaged: Path):
     if vouched or not schema:
         return doc
     from ..errors import CorpusError
-    from ..files import schema_error
     from ..paths import VECTORS
+    from ..schemas import schema_error
 
     problem = schema_error(VECTORS / "schema" / schema, doc, str(path))
     if problem:
@@ -112,7 +112,7 @@ class DataSuite(Suite):
         """The first problem of a scenario (or robustness probe) the definitions and the exchanges file can see:
         a message, field, value, parameter, effect, service, step or statement they lack; with ``params`` (a
         run's), also a parameter its messages cannot carry."""
-        from ..kinds.robustness.kind import as_scenario
+        from ..kinds.robustness.phase import as_scenario
         from ..kinds.scenario.lint import lint_scenario
 
         wire = self.wire

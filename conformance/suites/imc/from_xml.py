@@ -13,7 +13,7 @@ import re
 import xml.etree.ElementTree as ET
 
 from ...limits import XML_LIMIT
-from .definitions import SCALAR_FORMATS
+from .definitions import SCALAR_FORMATS, load_definitions
 
 HEADER = [("sync", "uint16_t"), ("mgid", "uint16_t"), ("size", "uint16_t"), ("timestamp", "fp64_t"),
           ("src", "uint16_t"), ("src_ent", "uint8_t"), ("dst", "uint16_t"), ("dst_ent", "uint8_t")]
@@ -34,6 +34,12 @@ VERSION = re.compile(r"\d+\.\d+\.\d+\Z")
 
 class XmlError(ValueError):
     """The file is not an IMC.xml the suite can read; the message names the element."""
+
+
+def xml_document(raw: bytes) -> dict:
+    """The definitions document of an IMC.xml's bytes, with the packaged definitions' wire facts."""
+    packaged = load_definitions().raw
+    return definitions_from_xml(raw, packaged["frame"], packaged["types"])
 
 
 def definitions_from_xml(raw: bytes, frame: dict, types: dict) -> dict:

@@ -127,7 +127,7 @@ class ImcSuite(DataSuite):
 
     def generate_from(self, source: Path, out: Path) -> int:
         """A suite folder for the IMC.xml ``source``, written into ``out``; ValueError for an XML it cannot read."""
-        from .corpus.build import folder_from_xml
+        from .xml_folder import folder_from_xml
         return folder_from_xml(source, out)
 
     def fuzz_source(self, edition: str, cases=()):

@@ -17,7 +17,8 @@ from pathlib import Path
 from ...inputs import read_bytes
 from ...limits import XML_LIMIT
 from ..data_suite import MANIFEST, manifest_entries
-from .definitions import Definitions, load_definitions, parse_definitions
+from .definitions import Definitions, parse_definitions
+from .from_xml import XmlError, xml_document
 from .paths import IMC
 
 
@@ -26,14 +27,6 @@ def generator_sources() -> list[bytes]:
     here = Path(__file__).parent
     return [p.read_bytes() for p in (here / "whole.py", here / "from_xml.py", here / "codec.py", here / "definitions.py",
                                      *sorted((here / "corpus").glob("*.py")))]
-
-
-def xml_document(raw: bytes) -> dict:
-    """The definitions document of an IMC.xml's bytes, with the packaged definitions' wire facts."""
-    from .from_xml import definitions_from_xml
-
-    packaged = load_definitions().raw
-    return definitions_from_xml(raw, packaged["frame"], packaged["types"])
 
 
 @cache
@@ -47,8 +40,6 @@ def imc_xml_definitions() -> Definitions:
 def merged_document(seed: dict, xml: dict) -> dict:
     """The seed definitions with every message of the XML they lack; the seeds' auxiliary messages become suite
     messages. XmlError where the XML gives a seed message's id another name."""
-    from .from_xml import XmlError
-
     by_id = {m["id"]: m for m in xml["messages"]}
     messages = []
     for m in seed["messages"]:
