@@ -9,7 +9,7 @@ import argparse
 import ipaddress
 import math
 
-from .limits import SHARDS_MAX, STARTUP_MAX, TIME_SCALE_MAX
+from .limits import FUZZ_COUNT_MAX, MEMORY_LIMIT_MAX, SHARDS_MAX, STARTUP_MAX, TIME_SCALE_MAX, TIMEOUT_MAX
 
 
 def bounded(top: float | None, what: str = "number of seconds"):
@@ -27,13 +27,15 @@ def bounded(top: float | None, what: str = "number of seconds"):
 
 
 positive_seconds = bounded(None)
+timeout_seconds = bounded(TIMEOUT_MAX)
 startup_seconds = bounded(STARTUP_MAX)
 time_scale = bounded(TIME_SCALE_MAX, "factor")
 
 
 def megabytes(text: str) -> int:
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number of megabytes (0: no limit)")
+    if not text.isdigit() or int(text) > MEMORY_LIMIT_MAX:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number of megabytes, at most {MEMORY_LIMIT_MAX} "
+                                         "(0: no limit)")
     return int(text)
 
 
@@ -41,6 +43,14 @@ def count(text: str) -> int:
     if not text.isdigit():
         raise argparse.ArgumentTypeError(f"{text!r}: give a whole number")
     return int(text)
+
+
+def fuzz_count(text: str) -> int:
+    """A whole number of examples or mutations per message, at most ``FUZZ_COUNT_MAX``."""
+    value = count(text)
+    if value > FUZZ_COUNT_MAX:
+        raise argparse.ArgumentTypeError(f"{text!r}: at most {FUZZ_COUNT_MAX:,} per message")
+    return value
 
 
 def system_id(text: str) -> int:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..arguments import count, megabytes, port, positive_seconds, shard, startup_seconds, system_id, time_scale
+from ..arguments import count, megabytes, port, shard, startup_seconds, system_id, time_scale, timeout_seconds
 from ..suites import names as suite_names, variants as suite_variants
 
 REPORTS = ("json", "junit", "markdown", "html")
@@ -55,7 +55,7 @@ def add_adapter(parser, *, what: str = "an implementation") -> None:
     parser.add_argument("--adapter-socket", metavar="URL",
                         help="an implementation serving the same JSON lines on a socket: tcp://HOST:PORT "
                              "(IPv6 as tcp://[::1]:PORT) or unix:PATH")
-    parser.add_argument("--timeout", type=positive_seconds, default=5.0,
+    parser.add_argument("--timeout", type=timeout_seconds, default=5.0,
                         help="seconds per request for subprocess and socket adapters (default 5)")
     parser.add_argument("--memory-limit", type=megabytes, default=DEFAULT_MEMORY_MB, metavar="MB",
                         help=f"data memory a subprocess adapter may use (default {DEFAULT_MEMORY_MB}; 0: no limit): one "

@@ -3,22 +3,10 @@
 from __future__ import annotations
 
 from .. import codec
+from ..decoded_form import used_abbrevs
 from ..definitions import Definitions, MessageDef
 
 ALL_CHECKS = ["encode-le", "encode-be", "decode-le", "decode-be", "roundtrip"]
-
-
-def used_abbrevs(value, found: set[str]) -> set[str]:
-    """Every message abbreviation inside a decoded-form value."""
-    if isinstance(value, dict):
-        if "abbrev" in value and "fields" in value:
-            found.add(value["abbrev"])
-        for v in value.values():
-            used_abbrevs(v, found)
-    elif isinstance(value, list):
-        for v in value:
-            used_abbrevs(v, found)
-    return found
 
 
 class MessageCases:
@@ -35,7 +23,7 @@ class MessageCases:
         if case_id in self._ids:
             raise ValueError(f"duplicate case id {case_id}")
         self._ids.add(case_id)
-        uses = used_abbrevs(message, {self.mdef.abbrev}) if message else {self.mdef.abbrev}
+        uses = used_abbrevs(self.defs, message, {self.mdef.abbrev}) if message else {self.mdef.abbrev}
         record = {"id": case_id, "expect": expect, "clause": clause,
                   "definitions": {a: self.defs[a].hash for a in sorted(uses) if a in self.defs.by_abbrev},
                   "checks": checks}
