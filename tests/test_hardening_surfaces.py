@@ -154,6 +154,17 @@ def test_4_an_inline_field_of_any_message_with_no_message_of_scalars_to_fill_it_
     one_line(capsys.readouterr().err, "<field abbrev='h'>: an inline field of any message, and no message of scalar")
 
 
+def test_4_a_message_abbreviation_with_a_digit_gives_case_files_the_schema_takes(tmp_path, capsys):
+    """Found by generating random IMC.xml files: IMC allows digits in a message's abbreviation (as definitions.json
+    does), but the case id pattern of vectors.schema.json did not, so such a folder could not be run."""
+    raw = imc_xml('<message id="5" name="Sonar 3D" abbrev="Sonar3D"><field name="A" abbrev="a" type="uint8_t"/>'
+                  '</message>', tables="")
+    assert generate(tmp_path, raw, tmp_path / "out") == 0
+    capsys.readouterr()
+    assert main(["list", "--vectors", str(tmp_path / "out")]) == 0
+    assert capsys.readouterr().out.startswith("imc/Sonar3D/")
+
+
 # ---------------------------------------------------------------- the whole protocol's cache
 
 def cli(cache: Path, *args: str) -> subprocess.CompletedProcess:
