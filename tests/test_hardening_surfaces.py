@@ -549,6 +549,7 @@ def test_every_result_records_what_it_is_evidence_of_and_report_shows_it(saved, 
                                 "TextMessage", "--errata", "imcpy", "--waivers", str(waivers), "--json", str(path)]}
     from imc_conformance.files import read_result
     from imc_conformance.render import RENDERERS
+    from imc_conformance.render.common import provenance_lines
 
     assert RENDERERS["json"](read_result(path)) == path.read_text()  # read back exactly
     capsys.readouterr()
@@ -556,8 +557,9 @@ def test_every_result_records_what_it_is_evidence_of_and_report_shows_it(saved, 
     assert main(["report", str(path), "--markdown", str(md), "--html", str(tmp_path / "r.html")]) == 1
     out = capsys.readouterr().out
     for line in (f"corpus: {made['corpus']}", "selection: message TextMessage; cases", "errata key: imcpy",
-                 f"waivers: {waivers} (sha256:", "command: imc-conformance run --adapter imcpy"):
+                 "command: imc-conformance run --adapter imcpy"):
         assert line in out
+    assert f"waivers: {waivers} (sha256:{made['waivers']['sha256']}, 1 in force)" in provenance_lines(read_result(path))
     assert "errata key&#58; imcpy" in md.read_text() and "corpus: sha256:" in (tmp_path / "r.html").read_text()
 
 
