@@ -17,7 +17,6 @@ import pytest
 
 from test_imc_xml_folder import MESSAGES, TABLES, definitions, imc_xml
 
-from imc_conformance.cache import cache_dir
 from imc_conformance.cli import main
 from imc_conformance.errors import CorpusError
 from imc_conformance.paths import VECTORS
@@ -176,11 +175,9 @@ def cli(cache: Path, *args: str) -> subprocess.CompletedProcess:
 def whole_cache(tmp_path_factory):
     """A cache of its own with the imcpy sdist and IMC.xml (copied from this run's cache: no download) and the whole
     protocol's folder built once."""
-    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
-
     cache = tmp_path_factory.mktemp("cache")
-    for name in (fetch_imc_xml().name, "imcpy-1.1.2.tar.gz"):
-        shutil.copy(cache_dir() / name, cache / name)
+    for name in ("IMC-imcpy-1.1.2.xml", "imcpy-1.1.2.tar.gz"):
+        shutil.copy(cached(name), cache / name)
     done = cli(cache, "list", "--suite", "imc-full", "--message", "Heartbeat")
     assert done.returncode == 0, done.stderr
     return cache
@@ -273,9 +270,10 @@ def test_8_versions_sharing_a_cache_keep_each_others_folder_and_never_remove_one
 
 
 def cached(name: str) -> Path:
-    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
+    """The imcpy sdist or its IMC.xml in this run's cache (fetched there if need be)."""
+    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml, imcpy_sdist
 
-    return fetch_imc_xml().with_name(name)
+    return (imcpy_sdist() if name.endswith(".tar.gz") else fetch_imc_xml()).with_name(name)
 
 
 def test_9_the_sdist_is_fetched_as_a_file_never_built_and_checked_against_its_pinned_hash(tmp_path, monkeypatch):

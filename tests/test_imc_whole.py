@@ -267,10 +267,10 @@ def test_a_copy_of_imc_xml_with_a_message_added_and_a_field_changed_gives_a_corp
 def test_a_cached_imc_xml_not_as_extracted_is_extracted_again_and_never_used(tmp_path):
     """The IMC.xml in the cache is a file anyone could have changed: one that is not the pinned one is taken from the
     sdist again (here, the sdist of the cache copied: no download), and the suite is built from the real one."""
-    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
+    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml, imcpy_sdist
 
     xml = fetch_imc_xml()
-    shutil.copy(xml.with_name("imcpy-1.1.2.tar.gz"), tmp_path)
+    shutil.copy(imcpy_sdist(), tmp_path)
     (tmp_path / xml.name).write_text(xml.read_text(encoding="utf-8").replace('abbrev="Heartbeat"', 'abbrev="Heartbeats"',
                                                                              1), encoding="utf-8")
     done = subprocess.run([sys.executable, "-m", "imc_conformance.cli", "list", "--suite", "imc-full", "--message",

@@ -42,7 +42,7 @@ def selection(args):
     names) and how many the selection holds in all shards. Only the files of the selected messages are read
     (``--message``, or an id glob naming one) unless the run needs the whole corpus (waivers name any case; the
     robustness phase replays every frame)."""
-    from ..core.cases import select_cases, shard_of
+    from ..core.cases import select_cases
     from ..files import open_corpus
 
     whole = getattr(args, "waivers", None) or getattr(args, "robustness", False)
@@ -55,9 +55,7 @@ def selection(args):
     if unknown:
         raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
     chosen = select_cases(everything, args.edition, args.message, args.id, args.tag)
-    if args.shard is None:
-        return suite, everything, chosen, len(chosen)
-    return suite, everything, [c for c in chosen if shard_of(c.id, args.shard[1]) == args.shard[0]], len(chosen)
+    return suite, everything, select_cases(chosen, args.edition, shard=args.shard), len(chosen)
 
 
 def selected_groups(args) -> frozenset[str] | None:
