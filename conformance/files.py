@@ -72,7 +72,8 @@ def corpus_digest(suite: Suite, directory: Path | None = None) -> str:
     """``sha256:`` of the corpus ``open_corpus(suite.name, directory)`` reads (``DataSuite.corpus_digest`` over the
     folders its case files are read from)."""
     folder = Path(directory) if directory is not None else suite.folder
-    return suite.corpus_digest([suite.folder / sub for sub in suite.case_folders] if folder == suite.folder else [folder])
+    own = folder == suite.folder
+    return suite.corpus_digest([suite.folder / sub for sub in suite.case_folders] if own else [folder])
 
 
 @cache

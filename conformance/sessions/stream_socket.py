@@ -7,8 +7,8 @@ one request at a time after a failure so that the right case is blamed. A connec
 what a crash is for a program: the session reconnects and replays, and a request that loses the connection again
 while it is alone in flight is a CRASH; a request without an answer within the timeout is a TIMEOUT, and the
 connection is replaced. When no new connection can be made the remaining cases fail with that reason. The peer is
-untrusted: its name is resolved once, when the session is made, and each of its addresses is tried in turn; every line it sends is bounded and parsed as
-data; nothing it sends is executed or followed.
+untrusted: its name is resolved once, when the session is made (each of its addresses is then tried in turn); every
+line it sends is bounded and parsed as data; nothing it sends is executed or followed.
 """
 
 from __future__ import annotations

@@ -167,7 +167,8 @@ class DataSuite(Suite):
         manifest_path = self.packaged / MANIFEST
         if self.folder == self.packaged and self.packaged not in ALTERED and manifest_path.exists():
             return "sha256:" + hashlib.sha256(read_bytes(manifest_path)).hexdigest()
-        profiles = {f"profiles/{p.name}" for folder in (self.folder, self.packaged) for p in (folder / "profiles").glob("*.json")}
+        profiles = {f"profiles/{p.name}" for folder in (self.folder, self.packaged)
+                    for p in (folder / "profiles").glob("*.json")}
         used = [(name, self.data(name)) for name in sorted({*self.data_schemas, *profiles})]
         used += [(f"{folder.name}/{p.name}", p) for folder in case_folders for p in sorted(folder.glob("*.json"))]
         digest = hashlib.sha256()
