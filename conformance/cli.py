@@ -46,6 +46,7 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = build_parser(argv).parse_args(argv)
+    args.command_line = ["imc-conformance", *argv]  # what results record of how they were made
     from .core.waivers import WaiverError  # after parsing: --version and --help need none of the core
 
     try:

@@ -9,52 +9,20 @@ remembered per file content in the cache folder, since over a whole corpus it ta
 from __future__ import annotations
 
 import datetime as dt
-import json
+import hashlib
 from functools import cache
 from pathlib import Path
 
 from . import inputs
-from .cache import remembered
 from .errors import CorpusError
 from .core.cases import Case
-from .core.results import SCHEMAS, RunResult, format_version
+from .core.results import SCHEMAS, RunResult, format_version, message_verdict
 from .core.suite import Suite
 from .core.waivers import Waiver, WaiverError, waivers_in_force
 from .paths import VECTORS
+from .schemas import schema_error
 from .suites import load_suite
-from .suites.data_suite import manifest, read_document
-
-
-@cache
-def validator(schema: Path):
-    """The schema's bytes and its validator (jsonschema is imported here: only a run that validates pays for it)."""
-    from jsonschema import Draft202012Validator
-
-    raw = schema.read_bytes()
-    return raw, Draft202012Validator(json.loads(raw))
-
-
-def schema_error(schema: Path, doc, where: str, memo: bytes | None = None) -> str | None:
-    """``<where>: <JSON path>: <problem>`` for the first schema problem of ``doc``, or None. With ``memo`` (the
-    file's bytes), a document already found valid is not checked again."""
-    raw, check = validator(schema)
-    known, record = remembered(schema.name, raw, memo) if memo is not None else (False, lambda: None)
-    if known:
-        return None
-    from jsonschema.exceptions import best_match
-
-    try:
-        error = best_match(check.iter_errors(doc))
-    except RecursionError:
-        return f"{where}: " * bool(where) + "nested too deeply to check"
-    if error is None:
-        record()
-        return None
-    return f"{where}: " * bool(where) + f"{error.json_path}: {shorten(error.message)}"
-
-
-def shorten(text: str, limit: int = 240) -> str:
-    return text if len(text) <= limit else text[:limit] + "..."
+from .suites.data_suite import manifest, not_as_built, read_document
 
 
 def read_json(path: Path, error=ValueError):
@@ -100,19 +68,32 @@ def open_corpus(suite_name: str, directory: Path | None = None,
     return suite, read_cases(suite, ((folder.name, next(iter(suite.case_folders.values()))),), bare=folder)
 
 
+def corpus_digest(suite: Suite, directory: Path | None = None) -> str:
+    """``sha256:`` of the corpus ``open_corpus(suite.name, directory)`` reads (``DataSuite.corpus_digest`` over the
+    folders its case files are read from)."""
+    folder = Path(directory) if directory is not None else suite.folder
+    own = folder == suite.folder
+    return suite.corpus_digest([suite.folder / sub for sub in suite.case_folders] if own else [folder])
+
+
 @cache
 def read_cases(suite: Suite, folders: tuple[tuple[str, str], ...], bare: Path | None = None,
                groups: frozenset[str] | None = None) -> list[Case]:
     """Every case of the suite's case folders (sub-folder name, kind), each file checked unless the packaged
-    manifest vouches for its bytes; ids unique. ``groups``: skip the packaged files the manifest files elsewhere."""
-    listed = manifest(suite.packaged) if groups is not None and bare is None and suite.folder == suite.packaged else {}
+    manifest vouches for its bytes; ids unique; a file the manifest lists is there. ``groups``: skip the packaged
+    files the manifest files elsewhere."""
+    listed = manifest(suite.packaged) if bare is None and suite.folder == suite.packaged else {}
     cases, seen, found = [], set(), False
     for sub, kind in folders:
         folder = bare or suite.folder / sub
+        missing = sorted(name for name, entry in listed.items() if name.startswith(f"{sub}/") and (
+            groups is None or entry.get("group") in groups) and not (suite.folder / name).is_file())
+        if missing:  # a message left out would pass unseen
+            raise not_as_built(suite.packaged, f"{missing[0]} is listed in its manifest but missing")
         for path in sorted(folder.glob("*.json"), key=lambda p: p.name):  # names: faster than comparing paths
             found = True
             entry = listed.get(f"{sub}/{path.name}")
-            if entry is not None and entry["group"] not in groups:
+            if groups is not None and entry is not None and entry.get("group") not in groups:
                 continue
             for case in read_case_file(suite, kind, path):
                 if case.id in seen:
@@ -153,13 +134,15 @@ def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
 
 # ---------------------------------------------------------------- waivers and saved results
 
-def load_waivers(path: Path, known_ids: set[str], today: dt.date) -> tuple[dict[str, Waiver], list[str]]:
-    """The waivers in force by case id, and notes on the expired ones."""
-    _, doc = read_json(Path(path), WaiverError)
+def load_waivers(path: Path, known_ids: set[str], today: dt.date) -> tuple[dict[str, Waiver], list[str], dict]:
+    """The waivers in force by case id, notes on the expired ones, and what a result records of the file (its name
+    as given, the SHA-256 of its bytes, how many waivers were in force)."""
+    raw, doc = read_json(Path(path), WaiverError)
     problem = schema_error(VECTORS / "schema" / "waivers.schema.json", doc, str(path))
     if problem:
         raise WaiverError(problem)
-    return waivers_in_force(doc, known_ids, today, str(path))
+    active, notes = waivers_in_force(doc, known_ids, today, str(path))
+    return active, notes, {"file": str(path), "sha256": hashlib.sha256(raw).hexdigest(), "waivers": len(active)}
 
 
 def read_result(path: Path) -> RunResult:
@@ -176,4 +159,11 @@ def read_result(path: Path) -> RunResult:
     if version < 3:  # formats 1 and 2 knew only IMC: numeric message ids, no title (nor, in 1, completeness,
         # incidents or check kinds)
         doc = dict(doc, title="IMC", messages=[dict(m, key=str(m["id"])) for m in doc["messages"]])
-    return RunResult.from_dict(doc)
+    result = RunResult.from_dict(doc)
+    for i, m in enumerate(result.messages):
+        derived = message_verdict(m.cases, result.strict)
+        if m.verdict != derived and version >= 4:
+            raise ValueError(f"{path}: $.messages[{i}].verdict: {m.verdict} for {m.name}, whose cases give {derived}: "
+                             "a result that contradicts itself is not read")
+        m.verdict = derived  # formats 1 to 3 were written before the message verdicts of today (none UNSUPPORTED)
+    return result

@@ -138,7 +138,7 @@ def first_unique() -> int:
     to each other's numbers; recorded with the run, so that a replay finds the same."""
     import secrets
 
-    from .kinds.scenario.conductor import UNIQUE_SPAN
+    from .limits import UNIQUE_SPAN
 
     return secrets.randbelow(UNIQUE_SPAN)
 

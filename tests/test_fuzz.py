@@ -450,10 +450,13 @@ def test_promote_refuses_a_file_that_breaks_its_schema_in_one_line(tmp_path, cap
     assert message in err and len(err.strip().splitlines()) == 1
 
 
-def test_a_database_that_is_not_a_folder_and_a_suite_without_probes_are_usage_errors(tmp_path, capsys):
-    afile = tmp_path / "file"
-    afile.write_text("")
-    assert main(["fuzz", "--adapter", "imcpy", "--in-process", "--database", str(afile)]) == 2
-    assert "not a folder" in capsys.readouterr().err
+def test_a_database_is_refused_with_the_reason_and_a_suite_without_probes_is_a_usage_error(tmp_path, capsys):
+    """--database was a silent no-op (a seeded search keeps no example database): it is refused, saying why, and
+    nothing is written where it points."""
+    assert main(["fuzz", "--adapter", "imcpy", "--in-process", "--message", "Heartbeat", "--budget", "3",
+                 "--database", str(tmp_path / "db")]) == 2
+    err = capsys.readouterr().err
+    assert "hypothesis keeps no example database for a seeded search" in err and "--promote" in err
+    assert err.count("\n") == 1 and not (tmp_path / "db").exists()
     assert main(["fuzz", "--suite", "ros_acomms", "--target", "udp://127.0.0.1:9", "--allow-effects"]) == 2
     assert "cannot be fuzzed live" in capsys.readouterr().err

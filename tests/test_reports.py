@@ -139,8 +139,11 @@ def test_json_validates_and_round_trips(which, request):
 
 
 def _older(doc: dict, version: int) -> dict:
-    """``doc`` as formats 1 to 3 wrote it: before shards; formats 1 and 2: IMC only, numeric message ids, no title
-    (format 1: no completeness, incidents or check kinds)."""
+    """``doc`` as formats 1 to 4 wrote it: before provenance; formats 1 to 3: before shards; formats 1 and 2: IMC
+    only, numeric message ids, no title (format 1: no completeness, incidents or check kinds)."""
+    doc = {k: v for k, v in doc.items() if k != "provenance"}
+    if version == 4:
+        return doc | {"format": "imc-conformance-result/4"}
     if version == 3:
         return {k: v for k, v in doc.items() if k != "shard"} | {"format": "imc-conformance-result/3"}
     old = {k: v for k, v in doc.items() if k != "title"}
@@ -152,7 +155,7 @@ def _older(doc: dict, version: int) -> dict:
     return old
 
 
-@pytest.mark.parametrize("version", [1, 2, 3])
+@pytest.mark.parametrize("version", [1, 2, 3, 4])
 def test_report_reads_the_older_formats(version, imcpy_result, tmp_path):
     from imc_conformance.files import read_result
 

@@ -9,9 +9,8 @@ import json
 import math
 import time
 
-from ..kinds.scenario.conductor import UNIQUE_SPAN
 from ..inputs import parse_json
-from ..limits import STARTUP_MAX, TIME_SCALE_MAX
+from ..limits import STARTUP_MAX, TIME_SCALE_MAX, UNIQUE_SPAN
 from .writing import PcapNgWriter
 
 ABOUT = "imc-conformance run "

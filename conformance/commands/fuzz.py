@@ -4,12 +4,14 @@ into the corpus on request."""
 
 from __future__ import annotations
 
+import argparse
 import datetime as dt
 import time
 from pathlib import Path
 
+from ..arguments import count, fuzz_count, megabytes, positive_seconds, timeout_seconds
 from ..errors import UsageError
-from .options import DEFAULT_MEMORY_MB, add_reports, add_suite, add_target, count, megabytes, positive_seconds
+from .options import DEFAULT_MEMORY_MB, add_reports, add_suite, add_target
 
 DEFAULT_BUDGET = 100
 
@@ -30,12 +32,12 @@ def add(sub) -> None:
     fuzz.add_argument("--in-process", action="store_true",
                       help="run library adapters in this process (faster; by default each runs in a worker process, "
                            "so that its crash or hang is a finding with the input that caused it)")
-    fuzz.add_argument("--timeout", type=positive_seconds, default=5.0, help="seconds per request (default 5)")
+    fuzz.add_argument("--timeout", type=timeout_seconds, default=5.0, help="seconds per request (default 5)")
     fuzz.add_argument("--memory-limit", type=megabytes, default=DEFAULT_MEMORY_MB, metavar="MB",
                       help=f"data memory of each adapter process (default {DEFAULT_MEMORY_MB}; 0: no limit)")
     fuzz.add_argument("--seed", type=count, default=0, metavar="N", help="the run's seed (default 0): the same seed "
                                                                          "and budget give the same findings")
-    fuzz.add_argument("--budget", type=count, default=DEFAULT_BUDGET, metavar="N",
+    fuzz.add_argument("--budget", type=fuzz_count, default=DEFAULT_BUDGET, metavar="N",
                       help=f"examples generated per message and property (default {DEFAULT_BUDGET}); shrinking a "
                            "finding judges more")
     fuzz.add_argument("--duration", type=positive_seconds, metavar="S",
@@ -43,11 +45,10 @@ def add(sub) -> None:
     fuzz.add_argument("--property", action="append", default=[], choices=("message", "frame"),
                       help="message: generated messages, encoded and decoded both ways; frame: mutated frames "
                            "(default: both)")
-    fuzz.add_argument("--sweep", type=count, default=0, metavar="N",
+    fuzz.add_argument("--sweep", type=fuzz_count, default=0, metavar="N",
                       help="first, N mutations of each message's corpus frames drawn without hypothesis (the fast "
-                           "engine: judged in one batch, findings shrunk to the shortest frame)")
-    fuzz.add_argument("--database", type=Path, metavar="DIR",
-                      help="keep hypothesis's example database here (default: none, so runs are reproducible)")
+                           "engine: judged in batches, findings shrunk to the shortest frame)")
+    fuzz.add_argument("--database", type=Path, help=argparse.SUPPRESS)  # refused with the reason (command)
     fuzz.add_argument("--promote", type=Path, metavar="FILE",
                       help="add the unexplained findings to this promoted-findings file (vectors/<suite>/promoted.json "
                            "in a checkout); imc-conformance generate makes them vectors")
@@ -70,10 +71,14 @@ def command(args) -> int:
     from ..render.terminal import print_result
     from ..core.hello import check_hello
     from .adapters import adapter_arguments, builtin_argv, open_session, split_command
-    from .options import chosen_edition
+    from ..arguments import chosen_edition
     from .output import report_targets, terminal, write_reports
+    from .provenance import provenance
 
     targets = report_targets(args)
+    if args.database is not None:
+        raise UsageError("--database: a fuzzing run is seeded (the same seed and budget give the same findings), and "
+                         "hypothesis keeps no example database for a seeded search; keep a finding with --promote FILE")
     if args.budget == 0:
         raise UsageError("--budget 0 judges nothing: give a positive number of examples")
     adapter_arguments(args)
@@ -96,13 +101,6 @@ def command(args) -> int:
     names = [name for name, _ in chosen]
     if len(set(names)) != len(names):
         raise UsageError("an implementation is named twice")
-    database = None
-    if args.database is not None:
-        if args.database.exists() and not args.database.is_dir():
-            raise UsageError(f"--database {args.database}: not a folder (hypothesis keeps one file per example)")
-        from hypothesis.database import DirectoryBasedExampleDatabase
-
-        database = DirectoryBasedExampleDatabase(str(args.database))
     sessions = {}
     try:
         for name, argv in chosen:
@@ -110,8 +108,8 @@ def command(args) -> int:
                 sessions[name] = open_session(name, argv, args, suite, isolate=not args.in_process)
             except ValueError as exc:
                 raise UsageError(str(exc)) from exc
-        implementations = [check_hello(s.hello(), suite.name, suite.encoding_param + "s", suite.encodings)["implementation"]
-                           for s in sessions.values()]
+        hellos = [check_hello(s.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
+                  for s in sessions.values()]
         started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
         began = time.monotonic()
         notes = [f"seed {args.seed}, budget {args.budget} examples per {suite.group_label} and property, edition "
@@ -125,8 +123,7 @@ def command(args) -> int:
                          f"erratum to explain it{': ' + ', '.join(flagged[:20]) if flagged else ''}"
                          f"{' ...' if len(flagged) > 20 else ''}")
         until = began + args.duration if args.duration else None
-        search = Search(suite, source, sessions, edition, seed=args.seed, budget=args.budget, database=database,
-                        until=until)
+        search = Search(suite, source, sessions, edition, seed=args.seed, budget=args.budget, until=until)
         try:
             if args.sweep:
                 search.sweep(groups, args.sweep)
@@ -142,8 +139,10 @@ def command(args) -> int:
     judged = sum(tally.judged.values())
     notes.append(f"{judged} examples judged, {len(tally.findings)} findings ({unexplained(tally)} unexplained)"
                  + (f"; stopped early: {tally.stopped}" if tally.stopped else ""))
-    result = fuzz_result(suite, source, tally, names, implementations, edition, started=started,
+    result = fuzz_result(suite, source, tally, names, [h["implementation"] for h in hellos], edition, started=started,
                          duration=time.monotonic() - began, notes=notes)
+    result.provenance = provenance(args, suite, selected(args), errata=", ".join(sorted(
+        {h["errata"] for h in hellos if h["errata"]})) or None)
     console = terminal()
     print_result(result, console)
     problems = write_reports(result, targets, console)
@@ -174,6 +173,7 @@ def live_fuzz(args, suite, everything, source, groups, edition, targets) -> int:
     from ..fuzz.engine import mutated_cases
     from ..render.terminal import print_result
     from .output import terminal, write_reports
+    from .provenance import provenance
 
     if args.adapter or args.adapter_cmd:
         raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd, not both")
@@ -202,10 +202,16 @@ def live_fuzz(args, suite, everything, source, groups, edition, targets) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
     try:
-        result = run_cases(session, suite, probes, edition=edition, adapter=args.target, options=options, notes=notes)
+        result = run_cases(session, suite, probes, edition=edition, adapter=args.target, options=options, notes=notes,
+                           provenance=provenance(args, suite, selected(args)))
     finally:
         session.close()
     console = terminal()
     print_result(result, console)
     problems = write_reports(result, targets, console)
     return 2 if problems else result.exit_code()
+
+
+def selected(args) -> dict:
+    """What a fuzzing run's result records of what it generated from (``Provenance.selection``)."""
+    return {key: getattr(args, key) for key in ("message", "property", "seed", "budget", "sweep", "duration")}

@@ -19,7 +19,7 @@ def command(args) -> int:
     from ..core.cases import expectation
     from .run import selection
 
-    suite, _, cases = selection(args)
+    suite, _, cases, _ = selection(args)
     if args.scenarios:
         from ..live import list_live_cases
         try:

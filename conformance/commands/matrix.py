@@ -32,9 +32,7 @@ def command(args) -> int:
             result = read_result(path)
         except ValueError as exc:
             raise UsageError(str(exc)) from exc
-        label = label if sep and label else result.adapter
-        if label in labels:
-            label = f"{label} ({path.name})"
+        label = unique(label if sep and label else result.adapter, path, labels)
         labels.add(label)
         results.append((label, result))
     tables = build(results, args.cases)
@@ -48,3 +46,14 @@ def command(args) -> int:
     if not args.markdown and not args.html:
         print(markdown, end="")
     return 2 if problems else 0
+
+
+def unique(label: str, path: Path, taken: set[str]) -> str:
+    """``label``, or where another column has it, the label with the file's name, its path, then a number."""
+    for candidate in (label, f"{label} ({path.name})", f"{label} ({path})"):
+        if candidate not in taken:
+            return candidate
+    n = 2
+    while f"{label} ({path}) {n}" in taken:
+        n += 1
+    return f"{label} ({path}) {n}"

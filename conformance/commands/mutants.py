@@ -4,7 +4,8 @@ what caught each one and the score caught/total, and fails if a bug survives or 
 
 from __future__ import annotations
 
-from .options import add_suite, count
+from ..arguments import count
+from .options import add_suite
 
 DEFAULT_BUDGET = 40
 
@@ -26,7 +27,7 @@ def command(args) -> int:
     from ..escaping import printable
     from ..files import open_corpus
     from ..fuzz.mutation import score
-    from .options import chosen_edition
+    from ..arguments import chosen_edition
 
     suite, cases = open_corpus(args.suite, None, None)
     edition = chosen_edition(suite, args.edition)

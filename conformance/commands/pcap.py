@@ -10,7 +10,8 @@ from pathlib import Path
 
 from ..errors import UsageError
 from ..limits import PIPE_LIMIT
-from .options import add_adapter, add_judging, add_reports, address, count, offset_seconds
+from ..arguments import address, count, offset_seconds
+from .options import add_adapter, add_judging, add_reports
 
 
 def add(sub) -> None:
@@ -79,6 +80,7 @@ def judged(args, suite, rules, selection, judge, adapter, targets) -> int:
     """Judge the captures, replay a recorded run, decode the frames through an adapter; report; the exit code."""
     from ..render.terminal import print_result
     from .output import terminal, write_reports
+    from .provenance import provenance
 
     started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = time.perf_counter()
@@ -93,6 +95,8 @@ def judged(args, suite, rules, selection, judge, adapter, targets) -> int:
     result = judge.result(implementation=", ".join(Path(p).name for p in args.files), started=started,
                           duration=round(time.perf_counter() - began, 3), strict=args.strict, title=suite.title,
                           notes=damage, complete=complete)
+    result.provenance = provenance(args, suite, {key: getattr(args, key) for key in (
+        "message", "port", "src", "dst", "host", "start", "end")})
     if judge.about is not None and complete:
         try:
             merge(result, replay(judge.about, judge.commented, args.strict, selection.groups,

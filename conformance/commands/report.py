@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import UsageError
@@ -30,20 +31,23 @@ def command(args) -> int:
             results.append(read_result(Path(path)))
         except ValueError as exc:  # not JSON, unreadable, or not a valid result
             raise UsageError(f"cannot read the result {exc}") from exc
-    result = merged(results) if args.merge else results[0]
+    result = merged(results, args) if args.merge else results[0]
     console = terminal()
     print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
 
 
-def merged(results):
-    """The shards' results as one: in the suite's order of messages and of cases (what the whole run gives)."""
+def merged(results, args):
+    """The shards' results as one: in the suite's order of messages and of cases (what the whole run gives), made
+    by this command line."""
     from ..core.shards import merge
     from ..files import open_corpus
 
     groups = frozenset(m.name for r in results for m in r.messages)
     try:
         suite, cases = open_corpus(results[0].suite, None, groups)
-        return merge(results, [g.name for g in suite.groups], {c.id: i for i, c in enumerate(cases)})
+        result = merge(results, [g.name for g in suite.groups], {c.id: i for i, c in enumerate(cases)})
     except (ValueError, LookupError) as exc:
         raise UsageError(f"cannot merge: {exc}") from exc
+    result.provenance = replace(result.provenance, command=list(args.command_line))
+    return result

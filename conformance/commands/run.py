@@ -38,9 +38,10 @@ def add(sub) -> None:
 
 
 def selection(args):
-    """The suite, the cases of its corpus that were read, and the cases the options select. Only the files of the
-    selected messages are read (``--message``, or an id glob naming one) unless the run needs the whole corpus
-    (waivers name any case; the robustness phase replays every frame)."""
+    """The suite, the cases of its corpus that were read, the cases the options select (in the shard ``--shard``
+    names) and how many the selection holds in all shards. Only the files of the selected messages are read
+    (``--message``, or an id glob naming one) unless the run needs the whole corpus (waivers name any case; the
+    robustness phase replays every frame)."""
     from ..core.cases import select_cases
     from ..files import open_corpus
 
@@ -53,7 +54,8 @@ def selection(args):
     unknown = set(args.message) - {g.name for g in suite.groups}
     if unknown:
         raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
-    return suite, everything, select_cases(everything, args.edition, args.message, args.id, args.tag, args.shard)
+    chosen = select_cases(everything, args.edition, args.message, args.id, args.tag)
+    return suite, everything, select_cases(chosen, args.edition, shard=args.shard), len(chosen)
 
 
 def selected_groups(args) -> frozenset[str] | None:
@@ -80,9 +82,10 @@ def command(args) -> int:
     from ..render.terminal import print_result
     from .adapters import adapter_choice, open_session
     from .output import report_targets, terminal, write_file, write_reports
+    from .provenance import provenance
 
     targets = report_targets(args)
-    suite, everything, cases = selection(args)
+    suite, everything, cases, total = selection(args)
     gc.freeze()  # the corpus stays loaded to the end: the collector need never walk it again
     try:
         options = live.options(args, suite, everything)
@@ -92,18 +95,20 @@ def command(args) -> int:
     if args.target and (args.adapter or args.adapter_cmd or args.adapter_socket):
         raise UsageError("give either --target (a live node) or --adapter/--adapter-cmd/--adapter-socket, not both")
     name, argv = (args.target, None) if args.target else adapter_choice(args, suite)
-    if not cases:
-        raise UsageError("the selection matches no case")
+    if not total:
+        raise UsageError("the selection matches no case")  # a shard of none is a result of none (merged later)
     if args.dry_run:
         if args.pcap:
             raise UsageError("--pcap records what a run sends and receives; --dry-run sends nothing")
         return live.dry_run(suite, cases, args, options)
-    waivers, notes = {}, []
+    waivers, notes, waived = {}, [], None
     if args.waivers:
         try:
-            waivers, notes = load_waivers(Path(args.waivers), {c.id for c in everything}, dt.date.today())
+            waivers, notes, waived = load_waivers(Path(args.waivers), {c.id for c in everything}, dt.date.today())
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
+    made = provenance(args, suite, {"message": args.message, "id": args.id, "tag": args.tag, "cases": total},
+                      waivers=waived)
     console = terminal()
     args.first_unique = live.first_unique() if args.target else None
     recorder = open_recording(args, suite, cases, options)
@@ -118,7 +123,7 @@ def command(args) -> int:
         with progress_bar(args.no_progress) as progress:
             result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
                                waivers=waivers, strict=args.strict, notes=notes + held_notes + live.notes(args, options),
-                               progress=progress, options=options)
+                               progress=progress, options=options, provenance=made)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
     finally:
@@ -127,7 +132,8 @@ def command(args) -> int:
             recorder.close(complete=result is not None and result.complete)
     if args.shard:
         result.shard = args.shard
-        result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's cases")
+        result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's {total} "
+                               "cases")
     print_result(result, console)
     problems = write_reports(result, targets, console)
     if recorder is not None and recorder.failed:

@@ -14,7 +14,8 @@ import time
 from pathlib import Path
 
 from ..errors import UsageError
-from .options import add_judging, add_reports, address, positive_seconds
+from ..arguments import address, positive_seconds
+from .options import add_judging, add_reports
 
 REFRESH = 1.0  # seconds between redraws of the table
 SOL_PACKET, PACKET_STATISTICS = 263, 6  # linux/socket.h, linux/if_packet.h
@@ -38,6 +39,7 @@ def command(args) -> int:
     from ..render.terminal import print_result
     from .output import report_targets, terminal, write_reports
     from .pcap import capture_rules
+    from .provenance import provenance
 
     targets = report_targets(args)
     if (args.source is None) == (args.iface is None):
@@ -84,6 +86,7 @@ def command(args) -> int:
         report_losses(listen, judge)
     result = judge.result(implementation=what, started=started, duration=round(time.monotonic() - began, 3),
                           strict=args.strict, title=suite.title, until=time.time())
+    result.provenance = provenance(args, suite, {"message": args.message, "port": args.port, "host": args.host})
     print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
 

@@ -14,9 +14,10 @@ from dataclasses import asdict, dataclass, field
 from .verdicts import UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
-VERSION = 4
+VERSION = 5
 FORMAT = f"{FORMAT_NAME}/{VERSION}"
-SCHEMAS = {1: "result-1.schema.json", 2: "result-2.schema.json", 3: "result-3.schema.json", 4: "result.schema.json"}
+SCHEMAS = {1: "result-1.schema.json", 2: "result-2.schema.json", 3: "result-3.schema.json", 4: "result-4.schema.json",
+           5: "result.schema.json"}
 INTERRUPTED = 130  # the exit code of a run stopped by Ctrl-C, as shells report SIGINT
 
 
@@ -105,6 +106,25 @@ class MessageResult:
         return Counter(c.verdict for c in self.cases)
 
 
+@dataclass(frozen=True)
+class Provenance:
+    """What a result is evidence of (format 5 on): the tool that judged, the corpus (the digest of its files), the
+    selection of its cases, the implementation errata key and the waivers in effect, and the command line."""
+
+    tool: str  # "imc-conformance <version>"
+    corpus: str  # "sha256:<hex>"
+    selection: dict  # the options that chose the cases, and how many the selection holds (before any shard)
+    errata: str | None  # the errata key failures were labelled with
+    waivers: dict | None  # {"file", "sha256", "waivers"}: the waivers file read, or None
+    command: list[str]  # the command line, as given
+
+    SHARED = ("tool", "corpus", "selection", "errata", "waivers")  # what the shards of one run have alike
+
+    def differences(self, other: Provenance) -> list[str]:
+        """The fields the shards of one run share in which ``other`` differs."""
+        return [key for key in self.SHARED if getattr(self, key) != getattr(other, key)]
+
+
 @dataclass
 class RunResult:
     suite: str
@@ -122,6 +142,7 @@ class RunResult:
     incidents: list[Incident] = field(default_factory=list)
     untested: list[str] = field(default_factory=list)  # check kinds the adapter's hello ruled out entirely
     shard: tuple[int, int] | None = None  # (K, N) of a run of one shard of its selection (--shard K/N)
+    provenance: Provenance | None = None  # None: a result of format 1 to 4, or one made without the command line
 
     @property
     def cases(self) -> list[CaseResult]:
@@ -134,14 +155,14 @@ class RunResult:
 
     def exit_code(self) -> int:
         """130 if interrupted; else 2 for an adapter error or protocol violation, or when nothing was tested
-        (every case INCONCLUSIVE or UNSUPPORTED); else 1 for a failing verdict, a crash incident or (under
-        --strict) a check kind left untested; else 0."""
+        (every case INCONCLUSIVE or UNSUPPORTED; a shard of no case tested all it was given); else 1 for a failing
+        verdict, a crash incident or (under --strict) a check kind left untested; else 0."""
         if not self.complete:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
         if Verdict.ADAPTER_ERROR in verdicts or any(i.kind == "protocol" for i in self.incidents):
             return 2
-        if verdicts <= set(UNTESTED):
+        if verdicts <= set(UNTESTED) and (verdicts or self.shard is None):
             return 2  # nothing was tested
         if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested):
             return 1
@@ -158,7 +179,8 @@ class RunResult:
             "messages": [{"name": m.name, "key": m.key, "verdict": m.verdict,
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
                           "cases": [case_dict(c, memo) for c in m.cases]} for m in self.messages],
-        } | ({"shard": {"index": self.shard[0], "of": self.shard[1]}} if self.shard else {})
+        } | ({"shard": {"index": self.shard[0], "of": self.shard[1]}} if self.shard else {}) | (
+            {"provenance": asdict(self.provenance)} if self.provenance else {})
 
     @classmethod
     def from_dict(cls, doc: dict) -> RunResult:
@@ -168,7 +190,8 @@ class RunResult:
         return cls(doc["suite"], doc["title"], doc["edition"], doc["implementation"], doc["adapter"], doc["strict"],
                    doc["started"], doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
                    [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []),
-                   (doc["shard"]["index"], doc["shard"]["of"]) if "shard" in doc else None)
+                   (doc["shard"]["index"], doc["shard"]["of"]) if "shard" in doc else None,
+                   Provenance(**doc["provenance"]) if "provenance" in doc else None)
 
 
 def format_version(doc) -> int:

@@ -7,11 +7,12 @@ import datetime as dt
 import gc
 import time
 from collections import Counter, defaultdict
+from dataclasses import replace
 from typing import Callable
 
 from .cases import Case, expectation
 from .hello import check_hello
-from .results import CaseResult, CheckResult, Judgement, MessageResult, RunResult, message_verdict
+from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
 from .session import Answer, Job, Session
 from .suite import Suite
 from .verdicts import Verdict, failing, worst
@@ -25,7 +26,7 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
               errata: str | None = None, waivers: dict[str, Waiver] | None = None, strict: bool = False,
               notes: list[str] | None = None, progress: Callable[[int], None] | None = None,
               options: dict | None = None, clock: Callable[[], float] = time.perf_counter,
-              started: str | None = None) -> RunResult:
+              started: str | None = None, provenance: Provenance | None = None) -> RunResult:
     """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far, every
     ``PROGRESS_EVERY`` answers and at the end).
 
@@ -37,7 +38,8 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
 
     Ctrl-C (KeyboardInterrupt) while cases run ends the run early: the result then holds the cases whose
     every check was answered and is marked incomplete. ``errata`` names the implementation errata that
-    annotate failures (default: the key the adapter's hello declares, if any).
+    annotate failures (default: the key the adapter's hello declares, if any); ``provenance`` (what the command
+    line records of the run) is the result's, with that key.
 
     The cyclic garbage collector is paused while the run lasts: a run makes little cyclic garbage, and each full
     collection would walk the whole loaded corpus again.
@@ -46,14 +48,14 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     gc.disable()
     try:
         return _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-                    started)
+                    started, provenance)
     finally:
         if collecting:
             gc.enable()
 
 
 def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-         started) -> RunResult:
+         started, provenance) -> RunResult:
     started = started or dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = clock()
     hello = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
@@ -133,7 +135,8 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
                 for g in suite.groups if g.name in filed]
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
                      round(clock() - began, 3), messages, session.stderr, notes, complete,
-                     list(session.incidents), untested)
+                     list(session.incidents), untested,
+                     provenance=replace(provenance, errata=errata) if provenance is not None else None)
 
 
 def _check_name(result: CheckResult) -> str:

@@ -1,5 +1,6 @@
 """The shards of one selection (``run --shard K/N``, e.g. the jobs of a CI matrix) joined into the result the
-whole selection would have given: every shard of the same run settings, each once, no case twice."""
+whole selection would have given: every shard of the same run settings and provenance (tool, corpus, selection,
+errata, waivers), each once, no case twice."""
 
 from __future__ import annotations
 
@@ -21,6 +22,11 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
         for key in SAME:
             if getattr(r, key) != getattr(first, key):
                 raise ValueError(f"the shards differ in {key}: {getattr(first, key)!r} and {getattr(r, key)!r}")
+        if r.provenance is None or first.provenance is None:
+            raise ValueError("a shard records no provenance (a result of format 4 or before): run the shards again")
+        for key in first.provenance.differences(r.provenance):
+            raise ValueError(f"the shards differ in their {key}: {_shown(getattr(first.provenance, key))} and "
+                             f"{_shown(getattr(r.provenance, key))}")
     n = first.shard[1]
     if not 2 <= n <= SHARDS_MAX:
         raise ValueError(f"a run of {n} shards: a selection is split into 2 to {SHARDS_MAX}")
@@ -51,4 +57,10 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
                      min(r.started for r in results), round(sum(r.duration for r in results), 3), messages,
                      "".join(r.stderr for r in results), notes, all(r.complete for r in results),
                      [i for r in results for i in r.incidents],
-                     sorted(set(results[0].untested).intersection(*(r.untested for r in results))))
+                     sorted(set(results[0].untested).intersection(*(r.untested for r in results))),
+                     provenance=first.provenance)
+
+
+def _shown(value, limit: int = 200) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "..."

@@ -6,7 +6,7 @@ that the documented errata of every deviating implementation explain is reported
 known, and shrinking it would spend the time the unknown ones need.
 
 Reproducible: hypothesis runs with a ``random.Random`` seeded from ``(seed, suite, group, property, round)``, no
-deadline and no example database unless one is given, so the same seed and budget give the same findings.
+deadline and no example database (a seeded search keeps none), so the same seed and budget give the same findings.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from ..core.verdicts import failing
 from .source import PROPERTIES
 
 MAX_FINDINGS = 4  # distinct findings per group and property
+SWEEP_BATCH = 2000  # mutated frames the sweep builds and judges at a time
 
 
 @contextmanager
@@ -120,9 +121,9 @@ class Search:
     """One fuzzing run of a suite's source against named sessions."""
 
     def __init__(self, suite, source, sessions: dict, edition: str, *, seed: int, budget: int,
-                 database=None, until: float | None = None, max_findings: int = MAX_FINDINGS, first_only: bool = False):
+                 until: float | None = None, max_findings: int = MAX_FINDINGS, first_only: bool = False):
         self.suite, self.source, self.sessions, self.edition = suite, source, sessions, edition
-        self.seed, self.budget, self.database, self.until = seed, budget, database, until
+        self.seed, self.budget, self.until = seed, budget, until
         self.max_findings, self.first_only = max_findings, first_only
         self.tally = Tally()
 
@@ -163,26 +164,35 @@ class Search:
 
     def sweep(self, groups, per_group: int) -> None:
         """The fast engine: ``per_group`` mutations of the group's corpus frames drawn with a seeded ``random.Random``
-        (no hypothesis), judged in one batch per group. Each new deviation is shrunk by hand: the same mutation is
-        tried on the group's shorter corpus frames, shortest first, and with smaller choices, and the first that
-        still deviates the same way is the finding."""
+        (no hypothesis), judged in batches of ``SWEEP_BATCH`` (memory stays bounded; the duration is checked between
+        batches). Each new deviation is shrunk by hand: the same mutation is tried on the group's shorter corpus
+        frames, shortest first, and with smaller choices, and the first that still deviates the same way is the
+        finding."""
         rng = random.Random(f"{self.seed}/{self.suite.name}/sweep")
         for group in groups:
             seeds = seed_frames(self.source, group)
             if not seeds:
                 continue
-            cases = mutated_cases(self.source, group, rng, per_group)
-            self.tally.judged[(group, "sweep")] = len(cases)
-            results = self.judge_all([c for c, _ in cases.values()])
+            drawn: set[str] = set()  # case ids judged: a mutation drawn again is judged once
             seen: set = set()
-            for case_id, (case, how) in cases.items():
-                sig = self.signature(case, results[case_id])
-                if sig is None or sig in seen:
-                    continue
-                seen.add(sig)
-                case, found = self.smallest(group, seeds, how, sig, case, results[case_id])
-                self.tally.findings.append(Finding(case["id"].split("/")[1], "sweep", case, found,
-                                                   classify(list(self.sessions), found)))
+            self.tally.judged[(group, "sweep")] = 0
+            for start in range(0, per_group, SWEEP_BATCH):
+                if self.until is not None and time.monotonic() > self.until:
+                    self.tally.stopped = "the duration was spent"
+                    return
+                batch = mutated_cases(self.source, group, rng, min(SWEEP_BATCH, per_group - start))
+                cases = {i: c for i, c in batch.items() if i not in drawn}
+                drawn.update(cases)
+                self.tally.judged[(group, "sweep")] += len(cases)
+                results = self.judge_all([c for c, _ in cases.values()])
+                for case_id, (case, how) in cases.items():
+                    sig = self.signature(case, results[case_id])
+                    if sig is None or sig in seen:
+                        continue
+                    seen.add(sig)
+                    case, found = self.smallest(group, seeds, how, sig, case, results[case_id])
+                    self.tally.findings.append(Finding(case["id"].split("/")[1], "sweep", case, found,
+                                                       classify(list(self.sessions), found)))
 
     def smallest(self, group, seeds, how, sig, case, results):
         """The shortest input deviating as ``sig`` does: the same mutation on shorter frames, then smaller choices
@@ -232,15 +242,13 @@ class Search:
             left = self.budget - self.tally.judged[key]
             if left <= 0:
                 return
-            phases = [Phase.generate, Phase.shrink] + ([Phase.reuse] if self.database is not None else [])
-            config = settings(max_examples=left, deadline=None, database=self.database, phases=phases,
+            config = settings(max_examples=left, deadline=None, database=None, phases=[Phase.generate, Phase.shrink],
                               suppress_health_check=list(HealthCheck), verbosity=Verbosity.quiet,
                               report_multiple_bugs=False)
             rng = random.Random(f"{self.seed}/{self.suite.name}/{group}/{prop}/{round_}")
             try:
                 with reproducible():
-                    case = find(strategy, condition, settings=config, random=rng,
-                                database_key=f"{self.suite.name}/{group}/{prop}/{round_}".encode())
+                    case = find(strategy, condition, settings=config, random=rng)
             except (NoSuchExample, Unsatisfiable):
                 return
             results = self.judge(case)

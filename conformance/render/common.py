@@ -4,6 +4,7 @@ escaping of implementation text is ``escaping``'s)."""
 from __future__ import annotations
 
 import json
+import shlex
 
 from ..core.results import INTERRUPTED, CaseResult, RunResult
 from ..core.verdicts import FAILING, UNTESTED, Verdict
@@ -41,6 +42,20 @@ def incident_lines(result: RunResult) -> list[str]:
     return [f"{i.kind} incident: {i.reason}; the adapter was restarted and the {len(i.cases)} case(s) in flight "
             f"replayed one by one ({', '.join(i.cases[:5])}{', ...' if len(i.cases) > 5 else ''})"
             for i in result.incidents]
+
+
+def provenance_lines(result: RunResult) -> list[str]:
+    """What the result is evidence of, one ``name: value`` line each (``core.results.Provenance``), or one line
+    saying it was not recorded."""
+    p = result.provenance
+    if p is None:
+        return ["provenance: not recorded (a result of format 4 or before, or one made without the command line)"]
+    chosen = "; ".join(f"{key} {', '.join(map(str, value)) if isinstance(value, list) else value}"
+                       for key, value in p.selection.items() if value not in (None, [], False))
+    waivers = (f"{p.waivers['file']} (sha256:{p.waivers['sha256']}, {p.waivers['waivers']} in force)" if p.waivers
+               else "none")
+    return [f"tool: {p.tool}", f"corpus: {p.corpus}", f"selection: {chosen or 'everything'}",
+            f"errata key: {p.errata or 'none'}", f"waivers: {waivers}", f"command: {shlex.join(p.command)}"]
 
 
 def verdict_columns(result: RunResult) -> list[Verdict]:

@@ -17,7 +17,7 @@ from ..core.results import ByteDiff
 from ..core.verdicts import Verdict
 from ..core.results import FORMAT, CaseResult, RunResult
 from ..escaping import clean
-from .common import TIMELINE_LIMIT, attention, incident_lines, overall, verdict_columns
+from .common import TIMELINE_LIMIT, attention, incident_lines, overall, provenance_lines, verdict_columns
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 MAX_DETAILED = 200  # failing cases shown in full
@@ -51,7 +51,7 @@ def render_html(result: RunResult) -> str:
     stderr = clean(result.stderr)
     return environment().get_template("report.html.j2").render(
         result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown,
-        incidents=incident_lines(result), format=FORMAT,
+        incidents=incident_lines(result), provenance=provenance_lines(result), format=FORMAT,
         failing_total=len(failing), first_failure=first, group_tone=GROUP_TONE, stderr=stderr[:MAX_STDERR],
         stderr_cut=max(0, len(stderr) - MAX_STDERR))
 

@@ -7,7 +7,7 @@ import re
 from ..core.verdicts import Verdict
 from ..core.results import RunResult
 from ..escaping import clean
-from .common import TIMELINE_LIMIT, attention, incident_lines, overall, verdict_columns
+from .common import TIMELINE_LIMIT, attention, incident_lines, overall, provenance_lines, verdict_columns
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",
@@ -58,6 +58,8 @@ def render_markdown(result: RunResult) -> str:
         lines += [""] + [f"- ⚠️ {cell(line, 1000)}" for line in incident_lines(result)]
     if result.notes:
         lines += [""] + [f"- {cell(note)}" for note in result.notes]
+    lines += ["", "<details><summary>Provenance</summary>", ""] + [f"- {cell(line, 1000)}" for line in
+                                                                   provenance_lines(result)] + ["", "</details>"]
     failing = attention(result)
     if failing:
         lines += ["", f"<details><summary>{len(failing)} failing, non-strict or inconclusive cases</summary>", "",

@@ -14,7 +14,7 @@ from rich.table import Table
 from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
 from ..escaping import printable
-from .common import incident_lines, timeline_lines
+from .common import incident_lines, provenance_lines, timeline_lines
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
 SHOWN_FAILURES = 20
@@ -65,6 +65,8 @@ def print_result(result: RunResult, console: Console) -> None:
         console.print(f"[red]incident:[/] {safe(line[:600])}")
     for note in result.notes:
         console.print(f"[yellow]note:[/] {safe(note)}")
+    for line in provenance_lines(result):
+        console.print(f"[dim]{safe(line[:600])}[/]")
     summary = ", ".join(f"{n} {v}" for v, n in result.summary.items())
     explained = sum(1 for c in shown if c.errata)
     console.print(f"{len(result.cases)} cases in {result.duration:.2f} s: {summary}"

@@ -7,8 +7,8 @@ one request at a time after a failure so that the right case is blamed. A connec
 what a crash is for a program: the session reconnects and replays, and a request that loses the connection again
 while it is alone in flight is a CRASH; a request without an answer within the timeout is a TIMEOUT, and the
 connection is replaced. When no new connection can be made the remaining cases fail with that reason. The peer is
-untrusted: its address is resolved once, when the session is made; every line it sends is bounded and parsed as
-data; nothing it sends is executed or followed.
+untrusted: its name is resolved once, when the session is made (each of its addresses is then tried in turn); every
+line it sends is bounded and parsed as data; nothing it sends is executed or followed.
 """
 
 from __future__ import annotations
@@ -22,14 +22,15 @@ from ..core.session import AdapterStartError
 from .subprocess import Channel, SubprocessSession, read_lines
 
 
-def parse_address(url: str) -> tuple[int, object, str]:
-    """(family, address, how to name it) of ``tcp://HOST:PORT``, ``tcp://[IPv6]:PORT`` or ``unix:PATH``; the
-    host name, if not a literal address, is looked up here, once. ValueError for anything else."""
+def parse_address(url: str) -> tuple[list[tuple[int, object]], str]:
+    """The (family, address) pairs of ``tcp://HOST:PORT``, ``tcp://[IPv6]:PORT`` or ``unix:PATH``, to be tried in
+    turn, and how to name it; the host name, if not a literal address, is looked up here, once (every address it
+    has). ValueError for anything else."""
     if url.startswith("unix:"):
         path = url[len("unix://"):] if url.startswith("unix://") else url[len("unix:"):]
         if not path or "\0" in path:
             raise ValueError(f"--adapter-socket {url!r}: expected unix:PATH")
-        return socket.AF_UNIX, path, f"unix:{path}"
+        return [(socket.AF_UNIX, path)], f"unix:{path}"
     try:
         parts = urlsplit(url)
         port = parts.port
@@ -41,22 +42,31 @@ def parse_address(url: str) -> tuple[int, object, str]:
         found = socket.getaddrinfo(parts.hostname, port, type=socket.SOCK_STREAM)
     except (socket.gaierror, UnicodeError) as exc:
         raise ValueError(f"--adapter-socket {url!r}: cannot resolve {parts.hostname!r}: {exc}") from None
-    family, _, _, _, address = found[0]
-    return family, address, url
+    return list(dict.fromkeys((family, address) for family, _, _, _, address in found)), url
+
+
+def connect(addresses: list[tuple[int, object]], timeout: float) -> socket.socket:
+    """A stream socket connected to the first of ``addresses`` that accepts (each given ``timeout`` seconds); the
+    last refusal if none does."""
+    error = OSError("no address")
+    for family, address in addresses:
+        sock = socket.socket(family, socket.SOCK_STREAM)
+        sock.settimeout(timeout)
+        try:
+            sock.connect(address)
+            return sock
+        except OSError as exc:
+            sock.close()
+            error = exc
+    raise error
 
 
 class _Connection(Channel):
     """One connection, with the events and operations the session expects of a program's run: ``("line",
     bytes)``, ``("oversize", ...)``, and at the connection's end ``("exit", b"")`` then ``("eof", b"")``."""
 
-    def __init__(self, family: int, address, max_line: int, timeout: float):
-        sock = socket.socket(family, socket.SOCK_STREAM)
-        sock.settimeout(timeout)
-        try:
-            sock.connect(address)
-        except OSError:
-            sock.close()
-            raise
+    def __init__(self, addresses: list[tuple[int, object]], max_line: int, timeout: float):
+        sock = connect(addresses, timeout)
         sock.settimeout(None)
         super().__init__()
         self.sock = sock
@@ -103,12 +113,12 @@ class SocketSession(SubprocessSession):
 
     def __init__(self, url: str, *, name: str | None = None, **settings):
         settings.pop("memory_limit", None)  # the peer's memory is the peer's
-        family, self.address, shown = parse_address(url)
+        self.addresses, shown = parse_address(url)
         super().__init__([], name=name or shown, memory_limit=0, **settings)
-        self.family, self.url = family, shown
+        self.url = shown
 
     def _open(self):
         try:
-            return _Connection(self.family, self.address, self.max_line, self.hello_timeout)
+            return _Connection(self.addresses, self.max_line, self.hello_timeout)
         except OSError as exc:
             raise AdapterStartError(f"cannot connect to {self.url}: {exc.strerror or exc}") from exc

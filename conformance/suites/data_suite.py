@@ -4,7 +4,9 @@ the files a generator builds.
 The packaged files were checked when they were built (and by the tests), and ``manifest.json`` holds the SHA-256
 of each as built: a packaged file whose bytes are those is trusted as it is, without a check at every run. Any
 other file (a packaged one changed since, or one of a folder given instead with ``--vectors``: a user's) is read
-bounded and checked against its schema, and a problem is a corpus error naming the file and the JSON path."""
+bounded and checked against its schema, and a problem is a corpus error naming the file and the JSON path. A folder
+the suite builds for itself in the cache (the whole protocol's) has a sealed manifest: there a file not as built is
+never used, and the folder is damaged (a corpus error, and built again the next time)."""
 
 from __future__ import annotations
 
@@ -19,16 +21,27 @@ from ..core.suite import Suite
 from ..inputs import parse_json, read_bytes
 
 MANIFEST = "manifest.json"
+ALTERED: set[Path] = set()  # packaged folders a file was read from that is not as built (checked, then used)
 
 
 @cache
-def manifest(packaged: Path) -> dict[str, dict]:
-    """The packaged folder's manifest: file (relative path) -> {"sha256", and for case files "group", "kind"}; empty
-    (every file checked) where there is none or it cannot be read."""
+def manifest_of(packaged: Path) -> tuple[dict[str, dict], bool]:
+    """The packaged folder's manifest: file (relative path) -> {"sha256", and for case files "group", "kind"}, and
+    whether it is sealed (a folder the suite built for itself: a file not as built makes it damaged); empty (every
+    file checked) where there is none or it cannot be read."""
     try:
-        return orjson.loads(read_bytes(packaged / MANIFEST))["files"]
+        doc = orjson.loads(read_bytes(packaged / MANIFEST))
+        files, sealed = doc["files"], doc.get("sealed") is True
     except (ValueError, LookupError, TypeError):  # missing, unreadable, not JSON, not a manifest
-        return {}
+        return {}, False
+    if not isinstance(files, dict):
+        return {}, False
+    return {name: entry for name, entry in files.items() if isinstance(entry, dict)}, sealed
+
+
+def manifest(packaged: Path) -> dict[str, dict]:
+    """The files of the packaged folder's manifest (``manifest_of``)."""
+    return manifest_of(packaged)[0]
 
 
 def trusted(path: Path, raw: bytes, packaged: Path) -> bool:
@@ -39,15 +52,35 @@ def trusted(path: Path, raw: bytes, packaged: Path) -> bool:
     return isinstance(entry, dict) and entry.get("sha256") == hashlib.sha256(raw).hexdigest()
 
 
+def not_as_built(packaged: Path, what: str):
+    """The CorpusError for a file of the packaged folder that is not as its manifest says (``what``). A sealed folder
+    is then damaged: its manifest is removed, so that it is rebuilt the next time it is wanted, and nothing in it is
+    used; a folder shipped or generated in a checkout is to be generated again."""
+    from ..errors import CorpusError
+
+    if not manifest_of(packaged)[1]:
+        return CorpusError(f"{packaged}: {what} (run imc-conformance generate, or install again)")
+    try:
+        (packaged / MANIFEST).unlink()
+    except OSError:
+        pass
+    return CorpusError(f"{packaged}: damaged, {what}: nothing in it is used, and it is built again at the next run")
+
+
 def read_document(path: Path, packaged: Path) -> tuple[bytes, object, bool]:
     """A data or case file's bytes (read bounded), its JSON value, and whether the packaged manifest vouches for it
-    (then it needs no check); CorpusError for a file that cannot be read or is not JSON."""
+    (then it needs no check); CorpusError for a file that cannot be read or is not JSON, and for a file of a sealed
+    folder that is not as built."""
     from ..errors import CorpusError
 
     try:
         raw = read_bytes(path)
         if trusted(path, raw, packaged):
             return raw, orjson.loads(raw), True
+        if path.is_relative_to(packaged):
+            if manifest_of(packaged)[1]:
+                raise not_as_built(packaged, f"{path.relative_to(packaged)} is not as built")
+            ALTERED.add(packaged)
         return raw, parse_json(raw, str(path)), False
     except ValueError as exc:
         raise CorpusError(str(exc)) from None
@@ -60,8 +93,8 @@ def read_data_file(path: Path, schema: str | None, packaged: Path):
     if vouched or not schema:
         return doc
     from ..errors import CorpusError
-    from ..files import schema_error
     from ..paths import VECTORS
+    from ..schemas import schema_error
 
     problem = schema_error(VECTORS / "schema" / schema, doc, str(path))
     if problem:
@@ -112,7 +145,7 @@ class DataSuite(Suite):
         """The first problem of a scenario (or robustness probe) the definitions and the exchanges file can see:
         a message, field, value, parameter, effect, service, step or statement they lack; with ``params`` (a
         run's), also a parameter its messages cannot carry."""
-        from ..kinds.robustness.kind import as_scenario
+        from ..kinds.robustness.phase import as_scenario
         from ..kinds.scenario.lint import lint_scenario
 
         wire = self.wire
@@ -126,6 +159,23 @@ class DataSuite(Suite):
         if name not in known:
             raise ValueError(f"unknown profile {name!r} of the suite {self.name!r} (profiles: {', '.join(known) or 'none'})")
         return read_data_file(self.data(f"profiles/{name}.json"), "profile.schema.json", self.packaged)
+
+    def corpus_digest(self, case_folders: list[Path]) -> str:
+        """``sha256:`` of the corpus judged with, its case files read from ``case_folders``: of the packaged folder's
+        manifest when the suite is over that folder and no file of it was read other than as built (a sealed one's
+        never is); else of the name and bytes of every data file the suite uses and every case file of the folders."""
+        manifest_path = self.packaged / MANIFEST
+        if self.folder == self.packaged and self.packaged not in ALTERED and manifest_path.exists():
+            return "sha256:" + hashlib.sha256(read_bytes(manifest_path)).hexdigest()
+        profiles = {f"profiles/{p.name}" for folder in (self.folder, self.packaged)
+                    for p in (folder / "profiles").glob("*.json")}
+        used = [(name, self.data(name)) for name in sorted({*self.data_schemas, *profiles})]
+        used += [(f"{folder.name}/{p.name}", p) for folder in case_folders for p in sorted(folder.glob("*.json"))]
+        digest = hashlib.sha256()
+        for name, path in used:
+            if path.exists():
+                digest.update(f"{name}\0{hashlib.sha256(read_bytes(path)).hexdigest()}\n".encode())
+        return "sha256:" + digest.hexdigest()
 
     @cached_property
     def errata(self) -> list[dict]:

@@ -74,15 +74,3 @@ class RobustnessKind(LiveKind):
             skipped.append(f"{len(ids)} accepted frames of {', '.join(sorted({i.split('/')[1] for i in ids}))} ({why})")
         return out, skipped
 
-
-def as_scenario(case: dict) -> dict:
-    """A robustness probe as the scenario it amounts to (send, then expect the reply; or alive), for the lint."""
-    probe = case["probe"]
-    if "alive" in probe:
-        steps = [{"id": "alive", "alive": probe["alive"], "within": probe["within"]}]
-    else:
-        steps = [{"id": "probe", "send": probe["send"], "encoding": probe.get("encoding", "le")},
-                 {"id": "reply", "expect": probe["expect"], "reply_to": "probe", "within": probe["within"]}]
-    if "covers" in case:
-        steps[-1]["covers"] = case["covers"]
-    return dict(case, steps=steps)

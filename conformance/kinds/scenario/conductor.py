@@ -23,10 +23,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+from ...limits import UNIQUE_SPAN
 from .matchers import hashable
 from .wire import Addressing, Composed
 
-UNIQUE_SPAN = 0xFFF0  # the run's unique numbers cycle through 1..UNIQUE_SPAN
 NEAR = 256  # how far off a run's own number an echoed one may be and still be taken for a node's mistake
 
 

@@ -21,7 +21,7 @@ from ...kinds.vector.errors import EncodeError, FrameError, NotJudged
 from ...limits import NESTING_LIMIT
 from .crc16 import crc16
 from .definitions import SCALAR_FORMATS, Definitions, FieldDef, MessageDef
-from .unpackers import Irregular
+from .unpackers import Irregular, unpackers_of
 from ...kinds.vector.floats import float_from_bits, float_to_bits
 from .values import raw_bytes, text_bytes, text_value
 
@@ -186,7 +186,7 @@ def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None, *, 
     fields = None
     if spans is None and not off:
         try:
-            fields = defs.unpackers.fields(mdef, frame, e, HEADER_SIZE, end)[0]
+            fields = unpackers_of(defs).fields(mdef, frame, e, HEADER_SIZE, end)[0]
         except Irregular:  # the reader names what is wrong
             pass
     if fields is None:

@@ -116,6 +116,21 @@ class _Walk:
         self.depth -= 1
 
 
+def used_abbrevs(defs: Definitions, message: dict, found: set[str]) -> set[str]:
+    """``found`` with the abbreviation of a well-formed decoded message and of every inline message in it, read by
+    the definitions (a field named ``abbrev`` or ``fields`` is a field) and iteratively (no recursion an input
+    could drive)."""
+    stack = [message]
+    while stack:
+        m = stack.pop()
+        found.add(m["abbrev"])
+        for f in defs[m["abbrev"]].fields:
+            if f.type in ("message", "message-list"):
+                value = m["fields"][f.abbrev]
+                stack += [x for x in (value if isinstance(value, list) else [value]) if x is not None]
+    return found
+
+
 def _show(value) -> str:
     text = repr(value)
     return text if len(text) <= 80 else text[:77] + "..."

@@ -124,13 +124,6 @@ class Definitions:
     def by_abbrev(self) -> dict[str, MessageDef]:
         return {m.abbrev: m for m in self.messages}
 
-    @cached_property
-    def unpackers(self):
-        """The precompiled unpackers of these definitions' payloads (the codec's fast path)."""
-        from .unpackers import Unpackers
-
-        return Unpackers(self)
-
     def __getitem__(self, key: int | str) -> MessageDef:
         return self.by_id[key] if isinstance(key, int) else self.by_abbrev[key]
 

@@ -3,8 +3,9 @@ global), inline message type and message group, in the form of ``vectors/imc/def
 citing its element (``imc-xml#Message.field``). Sans-IO: ``definitions_from_xml`` takes the file's bytes.
 
 An IMC.xml is untrusted input: it is read whole only up to ``XML_LIMIT`` bytes, a document type (and so any
-entity) is refused, and whatever the codec could not read as IMC (a header unlike IMC's, a duplicate id, an
-unknown type, a table value its field cannot hold) is an ``XmlError`` naming the element.
+entity) is refused in whatever encoding the file is written, and whatever the codec could not read as IMC (a
+header unlike IMC's, a duplicate id, an unknown type, a table value its field cannot hold) is an ``XmlError``
+naming the element.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import re
 import xml.etree.ElementTree as ET
 
 from ...limits import XML_LIMIT
-from .definitions import SCALAR_FORMATS
+from .definitions import SCALAR_FORMATS, load_definitions
 
 HEADER = [("sync", "uint16_t"), ("mgid", "uint16_t"), ("size", "uint16_t"), ("timestamp", "fp64_t"),
           ("src", "uint16_t"), ("src_ent", "uint8_t"), ("dst", "uint16_t"), ("dst_ent", "uint8_t")]
@@ -34,6 +35,12 @@ VERSION = re.compile(r"\d+\.\d+\.\d+\Z")
 
 class XmlError(ValueError):
     """The file is not an IMC.xml the suite can read; the message names the element."""
+
+
+def xml_document(raw: bytes) -> dict:
+    """The definitions document of an IMC.xml's bytes, with the packaged definitions' wire facts."""
+    packaged = load_definitions().raw
+    return definitions_from_xml(raw, packaged["frame"], packaged["types"])
 
 
 def definitions_from_xml(raw: bytes, frame: dict, types: dict) -> dict:
@@ -62,6 +69,7 @@ def definitions_from_xml(raw: bytes, frame: dict, types: dict) -> dict:
         messages.append((m, element))
     if not messages:
         raise XmlError("<messages>: no <message> element")
+    leaf = any(m["fields"] and all(f["type"] in SIZES for f in m["fields"]) for m, _ in messages)
     out = []
     for m, element in messages:
         for f, x in zip(m["fields"], element.findall("field")):
@@ -73,6 +81,9 @@ def definitions_from_xml(raw: bytes, frame: dict, types: dict) -> dict:
                     raise XmlError(f"<message abbrev={m['abbrev']!r}> <field abbrev={f['abbrev']!r}>: message-type "
                                    f"{named!r} names {unknown[0]!r}, which is neither a message nor a message group")
                 f["message_type"] = {"values": list(dict.fromkeys(members)), "source": f["clause"]}
+            elif f["type"] in ("message", "message-list") and not leaf:
+                raise XmlError(f"<message abbrev={m['abbrev']!r}> <field abbrev={f['abbrev']!r}>: an inline field of "
+                               "any message, and no message of scalar fields that the corpus could fill it with")
         out.append(m)
     return {
         "$schema": "../schema/definitions.schema.json",
@@ -89,15 +100,33 @@ def definitions_from_xml(raw: bytes, frame: dict, types: dict) -> dict:
 def _root(raw: bytes) -> ET.Element:
     if len(raw) > XML_LIMIT:
         raise XmlError(f"the file is over {XML_LIMIT >> 20} MB: not an IMC.xml")
-    if b"<!DOCTYPE" in raw or b"<!ENTITY" in raw:
-        raise XmlError("the file declares a document type (entities are refused): an IMC.xml has none")
+    _refuse_document_type(raw)
     try:
         root = ET.fromstring(raw)
-    except ET.ParseError as exc:
+    except (ET.ParseError, ValueError) as exc:  # ValueError: an encoding expat cannot read (UTF-7)
         raise XmlError(f"not XML: {exc}") from None
     if root.tag != "messages" or root.get("name", "IMC") != "IMC":
         raise XmlError(f"<{root.tag[:40]}>: an IMC.xml's root is <messages name=\"IMC\">")
     return root
+
+
+def _refuse_document_type(raw: bytes) -> None:
+    """XmlError if the file declares a document type (and so may declare entities), in whatever encoding it is
+    written: expat decodes it as ElementTree will, and is stopped where the declaration starts, before anything
+    in it is declared or expanded."""
+    from xml.parsers import expat
+
+    def refuse(*_) -> None:
+        raise XmlError("the file declares a document type (entities are refused): an IMC.xml has none")
+
+    parser = expat.ParserCreate()
+    parser.StartDoctypeDeclHandler = refuse
+    try:
+        parser.Parse(raw, True)
+    except XmlError:
+        raise
+    except (expat.ExpatError, ValueError):
+        pass  # not XML: ElementTree says where
 
 
 def _section(root: ET.Element, tag: str, required: bool = True) -> ET.Element:

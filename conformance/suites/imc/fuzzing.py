@@ -25,8 +25,9 @@ from . import codec
 from .codec import FOOTER_SIZE, HEADER_SIZE, ORDERS
 from .corpus.acceptable import classes, outcomes
 from .corpus.samples import ORDINARY_HEADER
-from .corpus.records import ALL_CHECKS, used_abbrevs
+from .corpus.records import ALL_CHECKS
 from .crc16 import crc16
+from .decoded_form import used_abbrevs
 from .definitions import Definitions, FieldDef, MessageDef
 
 MAX_DEPTH = 2  # inline messages nest at most this deep in generated messages
@@ -216,7 +217,7 @@ class ImcFuzzSource:
 
     def record(self, group: str, expect: str, clause: str, checks: list[str], tags: list[str], *,
                frames: dict[str, bytes], message: dict | None = None, compare: dict | None = None, **extra) -> dict:
-        uses = used_abbrevs(message, {group}) if message else {group}
+        uses = used_abbrevs(self.defs, message, {group}) if message else {group}
         case = {"id": "", "expect": {self.edition: expect}, "clause": clause,
                 "definitions": {a: self.defs[a].hash for a in sorted(uses) if a in self.defs.by_abbrev},
                 "checks": checks, "frames": {o: f.hex() for o, f in frames.items()}}

@@ -127,10 +127,17 @@ class ImcSuite(DataSuite):
         return doc["message"]["abbrev"]
 
     def case_problem(self, kind: str, case: dict) -> tuple[str, str] | None:
-        """The first problem of the case's message against the definitions (a decoded form needs its whole
-        header); for a scenario, of its steps against the definitions and the exchange rules."""
+        """The first problem of the case against the definitions: a definition it was built for that they do not
+        give, then its message (a decoded form needs its whole header); for a scenario, of its steps against the
+        definitions and the exchange rules."""
         if kind in ("scenario", "robustness"):
             return self.live_problem(kind, case)
+        for abbrev, built in case.get("definitions", {}).items():  # a changed definition invalidates its cases
+            mdef = self.defs.by_abbrev.get(abbrev)
+            if mdef is None or mdef.hash != built:
+                return f".definitions.{abbrev}", (f"built for another definition of {abbrev} ({built}, where the "
+                                                  f"definitions give {mdef.hash if mdef else 'none'}): generate the "
+                                                  "case files again")
         if "message" not in case:
             return None
         expects = {case["expect"]} if isinstance(case["expect"], str) else set(case["expect"].values())
@@ -144,7 +151,7 @@ class ImcSuite(DataSuite):
 
     def generate_from(self, source: Path, out: Path) -> int:
         """A suite folder for the IMC.xml ``source``, written into ``out``; ValueError for an XML it cannot read."""
-        from .corpus.build import folder_from_xml
+        from .xml_folder import folder_from_xml
         return folder_from_xml(source, out)
 
     def fuzz_source(self, edition: str, cases=()):

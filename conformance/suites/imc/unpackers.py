@@ -38,6 +38,14 @@ class _Run:
         self.bits = {4: struct.Struct(e + "I").unpack_from, 8: struct.Struct(e + "Q").unpack_from}
 
 
+def unpackers_of(defs: Definitions) -> Unpackers:
+    """The unpackers of ``defs``, made at first use and kept with them (as a cached property would be)."""
+    made = defs.__dict__.get("_unpackers")
+    if made is None:
+        made = defs.__dict__["_unpackers"] = Unpackers(defs)
+    return made
+
+
 class Unpackers:
     """The plans of one set of definitions, built as messages are first read."""
 

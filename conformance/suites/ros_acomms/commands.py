@@ -16,7 +16,7 @@ def add(sub) -> None:
 
 
 def command(args) -> int:
-    from ...commands.options import chosen_edition
+    from ...arguments import chosen_edition
     from ...errors import UsageError
     from . import load
     from .package_files import write_package

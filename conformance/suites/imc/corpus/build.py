@@ -12,17 +12,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
 from ....fuzz import promote
 from ....fuzz.promote import promoted_cases
-from ....inputs import read_bytes
 from ....kinds.vector.provenance import case_documents, proven, provenance_markdown
-from ....limits import XML_LIMIT
-from ..definitions import Definitions, lint_definitions, load_definitions, parse_definitions
+from ..definitions import Definitions, lint_definitions, load_definitions
 from ..fuzzing import ImcFuzzSource
-from ..whole import xml_document
 from ... import load_suite
 from ...data_suite import write_generated
 from ..paths import imc_data
@@ -95,30 +91,6 @@ def message_files(defs: Definitions, examples: dict[str, list[dict]] | None = No
 
 def rules_document() -> dict:
     return json.loads(imc_data("rules.json").read_text(encoding="utf-8"))
-
-
-def folder_from_xml(source: Path, out: Path) -> int:
-    """Write a suite folder for the IMC.xml at ``source`` into ``out``: its definitions.json, a case file for every
-    message and the coverage table (``run --vectors out`` runs it); ValueError for an XML the suite cannot read."""
-    doc = xml_document(read_bytes(source, XML_LIMIT))
-    defs = parse_definitions(doc)
-    doc.pop("$schema")
-    files = {"definitions.json": json.dumps(doc, indent=1, ensure_ascii=True) + "\n"} | message_files(defs, schema=None)
-    if out.resolve().is_relative_to(imc_data().resolve()):
-        raise ValueError(f"{out}: inside the suite's own data folder (generate without --from rebuilds that)")
-    try:
-        (out / "cases").mkdir(parents=True, exist_ok=True)
-        stale = [p for p in (out / "cases").glob("*.json") if f"cases/{p.name}" not in files]
-        for path in stale:
-            path.unlink()
-        for name, text in files.items():
-            (out / name).write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise ValueError(f"{out}: cannot write: {exc.strerror or exc}") from None
-    cases = sum(len(json.loads(t)["cases"]) for n, t in files.items() if n.startswith("cases/"))
-    print(f"{cases} cases for {len(defs.messages)} messages of IMC {next(iter(doc['editions']))[4:]} in {out} "
-          f"({len(stale)} stale case files removed); run them with: imc-conformance run --vectors {out}")
-    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

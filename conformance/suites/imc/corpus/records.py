@@ -3,23 +3,11 @@
 from __future__ import annotations
 
 from .. import codec
+from ..decoded_form import used_abbrevs
 from ..definitions import Definitions, MessageDef
 
 ALL_CHECKS = ["encode-le", "encode-be", "decode-le", "decode-be", "roundtrip"]
 HEADER_FIELDS = {"timestamp", "src", "src_ent", "dst", "dst_ent"}
-
-
-def used_abbrevs(value, found: set[str]) -> set[str]:
-    """Every message abbreviation inside a decoded-form value."""
-    if isinstance(value, dict):
-        if "abbrev" in value and "fields" in value:
-            found.add(value["abbrev"])
-        for v in value.values():
-            used_abbrevs(v, found)
-    elif isinstance(value, list):
-        for v in value:
-            used_abbrevs(v, found)
-    return found
 
 
 class MessageCases:
@@ -38,7 +26,7 @@ class MessageCases:
         self._ids.add(case_id)
         if message is not None and set(message.get("header", {})) != HEADER_FIELDS:
             raise ValueError(f"{case_id}: the message must give every header field (an encoder's defaults are its own)")
-        uses = used_abbrevs(message, {self.mdef.abbrev}) if message else {self.mdef.abbrev}
+        uses = used_abbrevs(self.defs, message, {self.mdef.abbrev}) if message else {self.mdef.abbrev}
         record = {"id": case_id, "expect": expect, "clause": clause,
                   "definitions": {a: self.defs[a].hash for a in sorted(uses) if a in self.defs.by_abbrev},
                   "checks": checks}

@@ -8,7 +8,7 @@ import socket
 import sys
 import time
 
-from ....commands.options import chosen_edition, listen_port, probability
+from ....arguments import chosen_edition, listen_port, probability
 from .breaks import BREAKS, VARIANTS
 
 
