@@ -3,6 +3,7 @@ whole selection would have given: every shard of the same run settings, each onc
 
 from __future__ import annotations
 
+from .causes import regrouped
 from .results import MessageResult, RunResult, message_verdict
 
 SHARDS_MAX = 10_000  # shards a selection may be split into (limits.py lists it with the other bounds)
@@ -51,4 +52,5 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
                      min(r.started for r in results), round(sum(r.duration for r in results), 3), messages,
                      "".join(r.stderr for r in results), notes, all(r.complete for r in results),
                      [i for r in results for i in r.incidents],
-                     sorted(set(results[0].untested).intersection(*(r.untested for r in results))))
+                     sorted(set(results[0].untested).intersection(*(r.untested for r in results))),
+                     causes=regrouped([c for m in messages for c in m.cases], [g for r in results for g in r.cause_groups()]))
