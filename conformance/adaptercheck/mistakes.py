@@ -116,7 +116,7 @@ def value_mistake(expected, actual) -> str | None:
     None: −0.0 as 0, an fp32 NaN widened or quieted or written in wire order, a NaN's bits lost, an infinity or a float
     with too few digits."""
     if isinstance(expected, float) and expected == 0 and math.copysign(1.0, expected) < 0:
-        return "negative-zero" if _number(actual) and actual == 0 else None
+        return "negative-zero" if _number(actual) and actual == 0 and math.copysign(1.0, actual) > 0 else None
     if isinstance(expected, str) and expected.startswith("nan:"):
         bits = expected[4:]
         if isinstance(actual, str) and actual.startswith("nan:"):
@@ -131,9 +131,11 @@ def value_mistake(expected, actual) -> str | None:
         return "nan-word"
     if expected in ("inf", "-inf"):
         return "inf-word" if actual != expected else None
-    if isinstance(expected, float) and math.isfinite(expected) and _number(actual) and actual != expected \
-            and abs(actual - expected) <= 1e-5 * abs(expected):
-        return "float-digits"
+    if isinstance(expected, float) and math.isfinite(expected) and _number(actual) and actual != expected:
+        try:
+            return "float-digits" if abs(float(actual) - expected) <= 1e-5 * abs(expected) else None
+        except OverflowError:  # an integer beyond any float
+            return None
     return None
 
 

@@ -76,12 +76,13 @@ def _with_constants(raw: bytes) -> bool:
     return True
 
 
-def hello(line: Line, suite: str, encodings_key: str, encodings: tuple[str, ...], stderr) -> tuple[dict | None, list]:
+def hello(line: Line, suite: str, encodings_key: str, encodings: tuple[str, ...], stderr,
+          wait: float) -> tuple[dict | None, list]:
     """The adapter's hello answer (None if it gave none the suite can use) and the mistakes in it. ``stderr()``: what
-    the program wrote on stderr so far."""
+    the program wrote on stderr so far; ``wait``: seconds it has to start and answer (a JVM takes a while)."""
     where = "hello"
     line.channel.send({"id": HELLO_ID, "op": "hello"})
-    answers, mistakes = line.collect({HELLO_ID}, where, arrays=False)
+    answers, mistakes = line.collect({HELLO_ID}, where, arrays=False, timeout=wait)
     if HELLO_ID not in answers:
         if not line.ended and hasattr(line.channel, "popen"):  # a program: is its answer stuck in a buffer?
             line.channel.close_input()
@@ -92,7 +93,7 @@ def hello(line: Line, suite: str, encodings_key: str, encodings: tuple[str, ...]
             status = getattr(line.channel, "exit_status", lambda wait=0.5: None)() or "closed its output"
             tail = snippet(stderr()[-200:].strip())
             return None, mistakes + [Mistake("exited", f"it {status}" + (f"; stderr: {tail}" if tail else ""), where)]
-        return None, mistakes + [Mistake("hello-late", f"no answer within {line.timeout:g} s", where)]
+        return None, mistakes + [Mistake("hello-late", f"no answer within {wait:g} s", where)]
     reply = answers[HELLO_ID]
     if reply.get("ok") is False:
         return None, mistakes + [Mistake("hello-refused", snippet(str(reply.get("error", ""))), where)]

@@ -1,12 +1,13 @@
 """Failures grouped by cause across messages: what a reader fixes, rather than what a case id names.
 
 A case that fails (or, NON_STRICT, names the wrong rule) has one cause: what it is about (the rule its input breaks,
-the implementation-defined class it belongs to, the value class or field kind it exercises; else "valid input", or
-the family of a case of another kind, the third segment of its id) and what went wrong with it (accepted what breaks the rule, a check that fails, a crash).
+the implementation-defined class it belongs to; else "valid input", whatever value class it exercises, since one
+defect fails valid cases of many classes, or the family of a case of another kind, the third segment of its id) and
+what went wrong with it (accepted what breaks the rule, a check that fails, a crash).
 Cases with the same cause form a group, whatever message they are filed under; groups come largest first, each with
 its cases, its messages and the errata that explain its cases (an implementation without errata gets the same
-groups). Suite-generic: the causes come from the case's data (``rule``, ``class``, ``class:``/``kind:`` tags), or,
-for a result read back without them, from what the result keeps (``rule``, the id).
+groups). Suite-generic: the causes come from the case's data (``rule``, ``class``), or, for a result read back
+without them, from what the result keeps (``rule``, the expectation, the id).
 """
 
 from __future__ import annotations
@@ -50,8 +51,7 @@ def attended(verdict: Verdict) -> bool:
 
 
 def about(case, data: dict | None = None) -> tuple[str, str]:
-    """(key, words) of what a case is about: its rule, its class, its value class and field kind, else "valid input"
-    or its family (a scenario's)."""
+    """(key, words) of what a case is about: its rule, its class, else "valid input" or its family (a scenario's)."""
     data = data or {}
     rule = data.get("rule", case.rule)
     if rule:
@@ -60,13 +60,7 @@ def about(case, data: dict | None = None) -> tuple[str, str]:
     if named:
         named = "+".join(named) if isinstance(named, list) else named
         return f"class:{named}", f"class {named}"
-    tags = data.get("tags", ())
-    values = sorted(t.partition(":")[2] for t in tags if t.startswith("class:"))
-    kinds = sorted(t.partition(":")[2] for t in tags if t.startswith("kind:"))
-    if values:
-        kind = f"{'+'.join(kinds)} " if kinds else ""
-        return f"value:{kind.strip() + '/' if kind else ''}{'+'.join(values)}", f"{kind}value {'+'.join(values)}"
-    if case.expect == "valid":  # what differs is in the checks' details: the input is just valid
+    if case.expect == "valid":  # one defect fails valid cases of every value class: they are one cause
         return "valid", "valid input"
     family = case.id.split("/")[2] if case.id.count("/") >= 2 else case.id
     return f"family:{family}", family
