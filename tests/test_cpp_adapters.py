@@ -189,3 +189,10 @@ def test_roscpp_over_a_unix_socket_gives_the_subprocess_verdicts(roscpp_programs
     assert Verdict.CRASH in direct.values()
     with listening(roscpp_programs["seed"], f"unix:{tmp_path / 'roscpp.sock'}", "encoding") as session:
         assert by_verdict(verdicts(session, cases, "seed", "ros_acomms")) == direct
+
+
+@pytest.mark.parametrize("args", [["--adapter", "dune-cpp"], ["--suite", "ros_acomms", "--adapter", "roscpp"]])
+def test_the_compiled_adapters_pass_adapter_check(args, dune_program, roscpp_programs, capsys):
+    """The worked examples of the contract speak it (built above; adapter-check then starts them as a run does)."""
+    assert cli_main(["adapter-check", *args]) == 0
+    assert "MISTAKE" not in capsys.readouterr().out

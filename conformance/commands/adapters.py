@@ -124,8 +124,8 @@ def open_session(name: str, argv: list[str] | None, args, suite, *, isolate: boo
         load_library_adapter(name, suite, adapter_arguments(args))  # a one-line error now, not a dead worker later
         argv = worker_argv(name, suite, args)
     elif argv is not None and args.adapter_arg and name not in suite.adapters:
-        raise UsageError("--adapter-arg is for library and built-in adapters; a subprocess adapter takes its own "
-                         "arguments")
+        adapter_arguments(args)  # NAME=VALUE, checked
+        argv = [*argv, *args.adapter_arg]  # a program's last arguments, as the worker takes them (e.g. path=transport)
     if argv is not None:
         from ..sessions.subprocess import SubprocessSession
 

@@ -48,7 +48,8 @@ def add_adapter(parser, *, what: str = "an implementation") -> None:
                                           "file.py:attribute (an object, a class or a factory)")
     parser.add_argument("--adapter-arg", action="append", default=[], metavar="NAME=VALUE",
                         help="an argument for a library adapter's class or factory, or a built-in adapter's, e.g. "
-                             "edition=9.0.0 (repeatable)")
+                             "edition=9.0.0, or the last arguments of an --adapter-cmd program, e.g. path=transport "
+                             "(repeatable)")
     parser.add_argument("--adapter-cmd", metavar="CMD", help="a subprocess adapter speaking JSON lines "
                                                              "(adapters/README.md); split like a shell would, but never "
                                                              "run by one")

@@ -13,13 +13,15 @@ def add(sub) -> None:
     rep = sub.add_parser("report", help="re-render a saved JSON result, or merge the results of a run's shards")
     rep.add_argument("result", nargs="+", help="a file written by run --json (with --merge: one per shard)")
     rep.add_argument("--merge", action="store_true", help="join the results of every shard of one run (run --shard)")
+    rep.add_argument("--causes", action="store_true",
+                     help="print only the failures grouped by cause, largest first, each with all its cases")
     add_reports(rep)
     rep.set_defaults(func=command)
 
 
 def command(args) -> int:
     from ..files import read_result
-    from ..render.terminal import print_result
+    from ..render.terminal import print_causes, print_result
     from .output import report_targets, terminal, write_reports
 
     targets = report_targets(args)
@@ -33,7 +35,12 @@ def command(args) -> int:
             raise UsageError(f"cannot read the result {exc}") from exc
     result = merged(results, args) if args.merge else results[0]
     console = terminal()
-    print_result(result, console)
+    if args.causes:
+        print_causes(result, console, limit=None)
+        if not result.cause_groups():
+            console.print("no failing or non-strict case: nothing to group")
+    else:
+        print_result(result, console)
     return 2 if write_reports(result, targets, console) else result.exit_code()
 
 

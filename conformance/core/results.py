@@ -11,6 +11,7 @@ import re
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 
+from .causes import Cause, cause_from, group_causes, regrouped
 from .verdicts import UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
@@ -143,6 +144,14 @@ class RunResult:
     untested: list[str] = field(default_factory=list)  # check kinds the adapter's hello ruled out entirely
     shard: tuple[int, int] | None = None  # (K, N) of a run of one shard of its selection (--shard K/N)
     provenance: Provenance | None = None  # None: a result of format 1 to 4, or one made without the command line
+    causes: list[Cause] | None = None  # the failures grouped by cause (core.causes), made when first asked for
+
+    def cause_groups(self) -> list[Cause]:
+        """The failing and NON_STRICT cases grouped by cause, largest first (as the run grouped them, or from what
+        the result keeps)."""
+        if self.causes is None:
+            self.causes = group_causes(self.cases)
+        return self.causes
 
     @property
     def cases(self) -> list[CaseResult]:
@@ -174,7 +183,7 @@ class RunResult:
             "format": FORMAT, "suite": self.suite, "title": self.title, "edition": self.edition,
             "implementation": self.implementation, "adapter": self.adapter, "strict": self.strict,
             "started": self.started, "duration": self.duration, "complete": self.complete, "summary": self.summary,
-            "exit_code": self.exit_code(), "notes": self.notes, "untested": self.untested,
+            "exit_code": self.exit_code(), "causes": [c.to_dict() for c in self.cause_groups()], "notes": self.notes, "untested": self.untested,
             "incidents": [asdict(i) for i in self.incidents], "stderr": self.stderr,
             "messages": [{"name": m.name, "key": m.key, "verdict": m.verdict,
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
@@ -187,11 +196,12 @@ class RunResult:
         """A result read back from its JSON document, valid against the schema of this format version."""
         messages = [MessageResult(m["name"], m["key"], m["verdict"], [case_from(c, m["name"]) for c in m["cases"]])
                     for m in doc["messages"]]
+        causes = regrouped([c for m in messages for c in m.cases], [cause_from(c) for c in doc.get("causes", ())])
         return cls(doc["suite"], doc["title"], doc["edition"], doc["implementation"], doc["adapter"], doc["strict"],
                    doc["started"], doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
                    [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []),
                    (doc["shard"]["index"], doc["shard"]["of"]) if "shard" in doc else None,
-                   Provenance(**doc["provenance"]) if "provenance" in doc else None)
+                   Provenance(**doc["provenance"]) if "provenance" in doc else None, causes)
 
 
 def format_version(doc) -> int:

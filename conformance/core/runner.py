@@ -11,6 +11,7 @@ from dataclasses import replace
 from typing import Callable
 
 from .cases import Case, expectation
+from .causes import cause_of, group_causes
 from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
 from .session import Answer, Job, Session
@@ -133,9 +134,11 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
                                            passive[0].clause or "", passive))
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
                 for g in suite.groups if g.name in filed]
+    data = {case.id: case.data for case in cases}
+    causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)))
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
                      round(clock() - began, 3), messages, session.stderr, notes, complete,
-                     list(session.incidents), untested,
+                     list(session.incidents), untested, causes=causes,
                      provenance=replace(provenance, errata=errata) if provenance is not None else None)
 
 

@@ -4,6 +4,7 @@ errata, waivers), each once, no case twice."""
 
 from __future__ import annotations
 
+from .causes import regrouped
 from .results import MessageResult, RunResult, message_verdict
 
 SHARDS_MAX = 10_000  # shards a selection may be split into (limits.py lists it with the other bounds)
@@ -58,7 +59,8 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
                      "".join(r.stderr for r in results), notes, all(r.complete for r in results),
                      [i for r in results for i in r.incidents],
                      sorted(set(results[0].untested).intersection(*(r.untested for r in results))),
-                     provenance=first.provenance)
+                     provenance=first.provenance,
+                     causes=regrouped([c for m in messages for c in m.cases], [g for r in results for g in r.cause_groups()]))
 
 
 def _shown(value, limit: int = 200) -> str:

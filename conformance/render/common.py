@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import shlex
 
+from ..core.causes import Cause
 from ..core.results import INTERRUPTED, CaseResult, RunResult
 from ..core.verdicts import FAILING, UNTESTED, Verdict
 
@@ -67,3 +68,19 @@ def verdict_columns(result: RunResult) -> list[Verdict]:
 def attention(result: RunResult) -> list[CaseResult]:
     """The cases a reader must look at, in run order."""
     return [c for c in result.cases if c.verdict in ATTENTION]
+
+
+def errata_text(cause: Cause) -> str:
+    """The errata explaining a group's cases, with how many each ("P1 828, P2 298"), or ""."""
+    return ", ".join(f"{e} {n}" for e, n in cause.errata)
+
+
+def cause_line(cause: Cause) -> str:
+    """A group as one sentence: its title, its size, its first case, the errata that explain it."""
+    errata = errata_text(cause)
+    return f"{cause.title}: {cause.summary}" + (f" (errata {errata})" if errata else "")
+
+
+def cause_numbers(result: RunResult) -> dict[str, int]:
+    """The number (from 1, largest group first) of each grouped case's cause, by case id."""
+    return {case_id: n for n, cause in enumerate(result.cause_groups(), 1) for case_id in cause.cases}

@@ -17,12 +17,13 @@ from ..core.results import ByteDiff
 from ..core.verdicts import Verdict
 from ..core.results import FORMAT, CaseResult, RunResult
 from ..escaping import clean
-from .common import TIMELINE_LIMIT, attention, incident_lines, overall, provenance_lines, verdict_columns
+from .common import TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines, verdict_columns
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 MAX_DETAILED = 200  # failing cases shown in full
 MAX_STDERR = 20_000  # characters of adapter stderr shown
 MAX_LEGEND = 40  # differing ranges listed per frame pair
+MAX_CAUSE_CASES = 500  # case ids listed under a cause (the JSON result lists them all)
 ROW = 16  # bytes per dump row
 FULL_DUMP_ROWS = 24  # longer frames show only the rows around differences
 TONE = {
@@ -45,12 +46,19 @@ def environment() -> Environment:
 def render_html(result: RunResult) -> str:
     failing = attention(result)
     shown = [case_view(c, n) for n, c in enumerate(failing[:MAX_DETAILED])]
-    first = {}
+    first, anchors = {}, {}
     for view in shown:
         first.setdefault(view["case"].message, view["anchor"])
+        anchors[view["case"].id] = view["anchor"]
+    numbers = cause_numbers(result)
+    for view in shown:
+        view["cause"] = numbers.get(view["case"].id)
+    causes = [{"n": n, "cause": c, "errata": errata_text(c), "more": max(0, len(c.cases) - MAX_CAUSE_CASES),
+               "cases": [(i, anchors.get(i)) for i in c.cases[:MAX_CAUSE_CASES]]}
+              for n, c in enumerate(result.cause_groups(), 1)]
     stderr = clean(result.stderr)
     return environment().get_template("report.html.j2").render(
-        result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown,
+        result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown, causes=causes,
         incidents=incident_lines(result), provenance=provenance_lines(result), format=FORMAT,
         failing_total=len(failing), first_failure=first, group_tone=GROUP_TONE, stderr=stderr[:MAX_STDERR],
         stderr_cut=max(0, len(stderr) - MAX_STDERR))

@@ -13,7 +13,7 @@ from collections import Counter
 from ..core.verdicts import Verdict, failing
 from ..core.results import CaseResult, RunResult
 from ..escaping import clean
-from .common import incident_lines, timeline_lines
+from .common import cause_line, incident_lines, timeline_lines
 
 ERRORS = {Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR}
 MESSAGE_LIMIT = 500  # characters of detail in a failure's message attribute
@@ -31,9 +31,10 @@ def outcome(case: CaseResult, strict: bool) -> str | None:
     return None if v is Verdict.PASS and not case.notes else "note"
 
 
-def body(case: CaseResult) -> str:
-    """The full account of a case: detail, clause, rule, errata, waiver, and every check."""
-    lines = [f"{case.verdict.value}: {case.detail}", f"clause: {case.clause}", *(f"note: {n}" for n in case.notes)]
+def body(case: CaseResult, cause: str | None = None) -> str:
+    """The full account of a case: detail, its cause, clause, rule, errata, waiver, and every check."""
+    lines = [f"{case.verdict.value}: {case.detail}", *([f"cause: {cause}"] if cause else ()), f"clause: {case.clause}",
+             *(f"note: {n}" for n in case.notes)]
     if case.rule:
         lines.append(f"rule: {case.rule}")
     if case.errata:
@@ -50,16 +51,17 @@ def body(case: CaseResult) -> str:
     return clean("\n".join(lines))
 
 
-def testcase(case: CaseResult, suite: str, message: str, strict: bool) -> tuple[ET.Element, str | None]:
+def testcase(case: CaseResult, suite: str, message: str, strict: bool,
+             cause: str | None = None) -> tuple[ET.Element, str | None]:
     el = ET.Element("testcase", classname=f"{suite}.{message}", name=clean(case.id), time="0")
     kind = outcome(case, strict)
     if kind == "note":
-        ET.SubElement(el, "system-out").text = body(case)
+        ET.SubElement(el, "system-out").text = body(case, cause)
     elif kind == "skipped":
         ET.SubElement(el, "skipped", message=clean(case.detail)[:MESSAGE_LIMIT])
     elif kind:
         sub = ET.SubElement(el, kind, message=clean(case.detail)[:MESSAGE_LIMIT], type=case.verdict.value)
-        sub.text = body(case)
+        sub.text = body(case, cause)
     return el, kind
 
 
@@ -67,10 +69,12 @@ def render_junit(result: RunResult) -> str:
     props = [("suite", result.suite), ("edition", result.edition), ("implementation", result.implementation),
              ("adapter", result.adapter), ("strict", str(result.strict).lower()),
              ("complete", str(result.complete).lower()),
+             *(("cause", cause_line(c)) for c in result.cause_groups()),
              *(("incident", line) for line in incident_lines(result)), *(("note", note) for note in result.notes)]
+    titles = {case_id: c.title for c in result.cause_groups() for case_id in c.cases}
     suites = []
     for message in result.messages:
-        cases = [testcase(c, result.suite, message.name, result.strict) for c in message.cases]
+        cases = [testcase(c, result.suite, message.name, result.strict, titles.get(c.id)) for c in message.cases]
         kinds = Counter(kind for _, kind in cases)
         counts = {"tests": len(cases), "failures": kinds["failure"], "errors": kinds["error"], "skipped": kinds["skipped"]}
         suite = ET.Element("testsuite", name=f"{result.suite}/{message.name}", **{k: str(n) for k, n in counts.items()},

@@ -7,7 +7,7 @@ import re
 from ..core.verdicts import Verdict
 from ..core.results import RunResult
 from ..escaping import clean
-from .common import TIMELINE_LIMIT, attention, incident_lines, overall, provenance_lines, verdict_columns
+from .common import TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines, verdict_columns
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",
@@ -18,6 +18,8 @@ OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸�
 MAX_CASES = 50
 MAX_DETAIL = 300
 MAX_TIMELINES = 10  # scenarios whose timeline is shown
+MAX_CAUSES = 30
+MAX_CAUSE_CASES = 50  # case ids listed under a cause
 
 _ENTITIES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "&#124;", "`": "&#96;", ":": "&#58;"}  # ":x:" is an emoji
 _SPECIAL = re.compile(r"[&<>|`:]|[\\*_\[\]~]")
@@ -45,6 +47,7 @@ def render_markdown(result: RunResult) -> str:
         + f" · adapter {cell(result.adapter)} · {result.duration:.1f} s · {cell(result.started)}"
         + (" · strict" if result.strict else ""),
         "",
+        *cause_table(result),
         "| Message | Verdict | " + " | ".join(v.value for v in columns) + " |",
         "|---|---|" + "--:|" * len(columns),
     ]
@@ -62,10 +65,11 @@ def render_markdown(result: RunResult) -> str:
                                                                    provenance_lines(result)] + ["", "</details>"]
     failing = attention(result)
     if failing:
+        numbers = cause_numbers(result)
         lines += ["", f"<details><summary>{len(failing)} failing, non-strict or inconclusive cases</summary>", "",
-                  "| Case | Verdict | Detail | Errata |", "|---|---|---|---|"]
-        lines += [f"| <code>{cell(c.id)}</code> | {EMOJI[c.verdict]} {c.verdict.value} | {cell(c.detail, MAX_DETAIL)} | "
-                  f"{cell(', '.join(c.errata))} |" for c in failing[:MAX_CASES]]
+                  "| Case | Verdict | Cause | Detail | Errata |", "|---|---|--:|---|---|"]
+        lines += [f"| <code>{cell(c.id)}</code> | {EMOJI[c.verdict]} {c.verdict.value} | {numbers.get(c.id, '')} | "
+                  f"{cell(c.detail, MAX_DETAIL)} | {cell(', '.join(c.errata))} |" for c in failing[:MAX_CASES]]
         if len(failing) > MAX_CASES:
             lines += ["", f"and {len(failing) - MAX_CASES} more (see the full report)."]
         lines += ["", "</details>"]
@@ -76,3 +80,22 @@ def render_markdown(result: RunResult) -> str:
                       f"{cell(e.get('note', ''), MAX_DETAIL)} |" for e in c.timeline[:TIMELINE_LIMIT]]
             lines += ["", "</details>"]
     return "\n".join(lines) + "\n"
+
+
+def cause_table(result: RunResult) -> list[str]:
+    """The failures grouped by cause, largest first: a table, then each cause's cases (folded); nothing if none."""
+    causes = result.cause_groups()
+    if not causes:
+        return []
+    lines = [f"**Causes** ({len(causes)}, largest first):", "", "| # | Cause | Cases | Messages | Errata | First case |",
+             "|--:|---|--:|--:|---|---|"]
+    lines += [f"| {n} | {cell(c.title)} | {len(c.cases)} | {len(c.messages)} | {cell(errata_text(c))} | "
+              f"<code>{cell(c.cases[0])}</code> |" for n, c in enumerate(causes[:MAX_CAUSES], 1)]
+    if len(causes) > MAX_CAUSES:
+        lines += ["", f"and {len(causes) - MAX_CAUSES} more causes (see the full report)."]
+    lines += ["", "<details><summary>the cases of each cause</summary>", ""]
+    for n, c in enumerate(causes[:MAX_CAUSES], 1):
+        shown = ", ".join(f"<code>{cell(i)}</code>" for i in c.cases[:MAX_CAUSE_CASES])
+        more = f" and {len(c.cases) - MAX_CAUSE_CASES} more" if len(c.cases) > MAX_CAUSE_CASES else ""
+        lines.append(f"{n}. {cell(c.title)}: {shown}{more}")
+    return lines + ["", "</details>", ""]

@@ -14,11 +14,28 @@ from rich.table import Table
 from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
 from ..escaping import printable
-from .common import incident_lines, provenance_lines, timeline_lines
+from .common import cause_line, incident_lines, provenance_lines, timeline_lines
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
 SHOWN_FAILURES = 20
 SHOWN_TIMELINE = 12  # timeline entries under a failing scenario
+SHOWN_CAUSES = 20
+
+
+def print_causes(result: RunResult, console: Console, limit: int | None = SHOWN_CAUSES) -> None:
+    """The failures grouped by cause, largest first (``limit`` groups; None: all, each with every case id)."""
+    causes = result.cause_groups()
+    if not causes:
+        return
+    console.print(f"[bold]Causes[/]: {sum(len(c.cases) for c in causes)} failing or non-strict cases, "
+                  f"{len(causes)} cause{'s' if len(causes) != 1 else ''}, largest first")
+    for n, cause in enumerate(causes[:limit], 1):
+        console.print(f"{n:3}. {safe(cause_line(cause))}")
+        if limit is None:
+            for case_id in cause.cases:
+                console.print(f"       {safe(case_id)}")
+    if limit is not None and len(causes) > limit:
+        console.print(f"… and {len(causes) - limit} more causes (report --causes lists them all)")
 
 
 def safe(text: str | None) -> str:
@@ -27,6 +44,7 @@ def safe(text: str | None) -> str:
 
 
 def print_result(result: RunResult, console: Console) -> None:
+    print_causes(result, console)
     title = f"{result.implementation} — {result.title} corpus, edition {result.edition}"
     table = Table(title=safe(title + ("" if result.complete else " (INCOMPLETE: interrupted)")))
     table.add_column("message")

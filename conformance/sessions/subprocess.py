@@ -132,6 +132,10 @@ class Channel:
         """Write one request object, or a batch (a list of them), as one line."""
         self._outbox.put(request_line(request))
 
+    def close_input(self) -> None:
+        """Send nothing more: a program's stdin is closed once what was sent is written (its end of input)."""
+        self._outbox.put(None)
+
     def next_event(self, timeout: float):
         """The next event, or None if there was none within ``timeout`` seconds."""
         try:
@@ -374,6 +378,10 @@ class SubprocessSession:
             return _Process(self.argv, self.cwd, self.env, self.max_line, self._tail, self.memory_limit)
         except OSError as exc:
             raise AdapterStartError(f"cannot start adapter {self.argv}: {exc.strerror or exc}") from exc
+
+    def open_channel(self):
+        """A new channel to the program, not greeted (adapter-check speaks to it line by line); ``stop()`` it."""
+        return self._open()
 
     def _start(self) -> None:
         proc = self._open()

@@ -1,0 +1,3 @@
+module example.org/imc-conformance-starter
+
+go 1.21

@@ -1,0 +1,257 @@
+"""adapter-check: a short, fixed set of requests through any adapter, and every mistake it makes in speaking the
+contract explained with its fix. Suite-generic: the probes are the suite's own byte vectors (``probes``), judged by
+its case kind as a run judges them (the one verdict policy); what adapter-check adds is why an answer is wrong.
+
+An implementation's own failure on a probe (it accepts a frame with a wrong CRC, it decodes a value otherwise) is a
+finding, listed but not a mistake of the adapter; a failure the implementation's errata explain is one too. A value
+answered the way a JSON writer typically gets it wrong (−0.0 as 0, an fp32 NaN widened) is a mistake, whose fix says
+so if the implementation itself is to blame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..core.hello import check_hello
+from ..core.session import AdapterStartError, Answer, Job, Request
+from ..core.verdicts import Verdict
+from ..sessions.subprocess import SubprocessSession
+from . import wire
+from .mistakes import Mistake, value_mistake
+from .probes import FEATURES, Probe, choose
+
+FINE = (Verdict.PASS, Verdict.IMPL_DEFINED, Verdict.UNSUPPORTED)
+IN_FLIGHT = 3  # requests sent together to see that each is answered with its own id
+NO_HEADER = "encode-no-header"
+
+
+@dataclass
+class Outcome:
+    """What adapter-check found: what was checked and right (``passed``), the ``mistakes`` (each explained), and the
+    implementation's ``findings`` (a run shows them; not the adapter's fault)."""
+
+    implementation: str | None = None
+    passed: list[str] = field(default_factory=list)
+    mistakes: list[Mistake] = field(default_factory=list)
+    findings: list[str] = field(default_factory=list)
+
+    def add(self, found) -> None:
+        for mistake in found:
+            if all((m.code, m.seen) != (mistake.code, mistake.seen) for m in self.mistakes):
+                self.mistakes.append(mistake)
+
+    def by_kind(self) -> list[list[Mistake]]:
+        """The mistakes, those of one kind (code) together, in the order they were first seen."""
+        kinds: dict[str, list[Mistake]] = {}
+        for mistake in self.mistakes:
+            kinds.setdefault(mistake.code, []).append(mistake)
+        return list(kinds.values())
+
+
+def check(session, suite, cases: list, edition: str, timeout: float) -> Outcome:
+    """Drive ``session`` (a library, subprocess or socket session, possibly wrapped) through the probes."""
+    out = Outcome()
+    kind = suite.kinds["vector"]
+    probes = choose(cases, edition, kind.codec.rules)
+    inner = getattr(session, "inner", session)
+    if isinstance(inner, SubprocessSession):
+        if not _line_by_line(inner, suite, kind, probes, edition, timeout, out):
+            return out
+    try:
+        info = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
+    except AdapterStartError as exc:
+        if not out.mistakes:  # else what the line-by-line checks found is why
+            out.add([Mistake("no-start" if isinstance(inner, SubprocessSession) else "hello-fields", str(exc), "hello")])
+        return out
+    out.implementation = info["implementation"]
+    if not isinstance(inner, SubprocessSession):
+        out.passed.append(f"hello: {info['implementation']!r}, suites {info['suites']}, emits {info['emits']}")
+    if kind.name in info["kinds"]:
+        _probe(session, suite, kind, probes, edition, info, out)
+    else:
+        out.passed.append(f"no probe sent: the adapter runs {' and '.join(info['kinds'])} cases, not {kind.name} ones")
+    return out
+
+
+def _line_by_line(inner, suite, kind, probes: list[Probe], edition: str, timeout: float, out: Outcome) -> bool:
+    """The wire checks on a channel of their own; False when there is no hello to go on with."""
+    try:
+        channel = inner.open_channel()
+    except AdapterStartError as exc:
+        out.add([Mistake("no-start", str(exc), "start")])
+        return False
+    line = wire.Line(channel, timeout)
+    try:
+        info, found = wire.hello(line, suite.name, suite.encoding_param + "s", suite.encodings, lambda: inner.stderr,
+                                 inner.hello_timeout)
+        out.add(found)
+        if info is None:
+            return False
+        out.passed.append(f"hello: {info['implementation']!r}, suites {info['suites']}, "
+                          f"{suite.encoding_param}s {info[suite.encoding_param + 's']}, "
+                          f"batch {'yes' if info.get('batch') is True else 'no'}")
+        found = wire.unknown_op(line, suite.name)
+        out.add(found)
+        if not found:
+            out.passed.append("an operation it does not know answered \"unsupported\"")
+        vectors = kind.name in info.get("kinds", [kind.name])
+        requests, expected = _decodes(kind, probes if vectors else [], edition, first=wire.UNKNOWN_OP_ID + 1)
+        same = _matcher(kind, expected, edition)
+        if requests and not line.ended:
+            found = wire.together(line, requests, same, batch=False)
+            out.add(found)
+            if not found:
+                out.passed.append(f"{len(requests)} requests in flight together, each answered with its own id")
+        if requests and info.get("batch") is True and not line.ended:
+            requests, expected = _decodes(kind, probes, edition, first=max(requests) + 1)
+            found = wire.together(line, requests, _matcher(kind, expected, edition), batch=True)
+            out.add(found)
+            inner.batch = not found  # the probes then go one a line, so that each is judged on its own
+            if not found:
+                out.passed.append(f"a batch of {len(requests)} requests, each answered with its own id")
+    finally:
+        channel.stop(kill=True)
+    return True
+
+
+def _decodes(kind, probes: list[Probe], edition: str, first: int) -> tuple[dict[int, dict], dict[int, tuple]]:
+    """Decode requests of the first valid probes (id -> request body), and what each should decode to."""
+    requests, expected = {}, {}
+    for probe in [p for p in probes if p.teaches in FEATURES][:IN_FLIGHT]:
+        data = probe.case.data
+        request = next(r for r in kind.plan(data, edition, set(kind.codec.encodings)) if r.op == "decode")
+        ident = first + len(requests)
+        requests[ident] = {"op": "decode", "suite": probe.case.id.split("/")[0], "frame": request.frame.hex(),
+                           **request.params}
+        expected[ident] = (data["message"], data.get("compare", {}).get("nan_payload", False))
+    return requests, expected
+
+
+def _matcher(kind, expected: dict[int, tuple], edition: str):
+    """``same(ident, reply)``: the request whose expected message a decode reply holds (its own first), or None."""
+    def same(ident: int, reply: dict):
+        message = reply.get("message") if reply.get("ok") is True else None
+        if not isinstance(message, dict):
+            return None
+        for candidate in sorted(expected, key=lambda i: i != ident):
+            wanted, pinned = expected[candidate]
+            try:
+                if not kind.codec.differences(wanted, message, pinned, edition):
+                    return candidate
+            except (TypeError, ValueError, KeyError, AttributeError):  # an answer no comparison can read
+                return None
+        return None
+    return same
+
+
+def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, out: Outcome) -> None:
+    """Every probe through the session, judged by the case kind; each answer that is not right explained."""
+    emits = frozenset(info["emits"])
+    jobs, by_job = [], {}
+    for probe in probes:
+        for request in kind.plan(probe.case.data, edition, emits):
+            jobs.append(Job(suite.name, probe.case.id, request))
+            by_job[id(jobs[-1])] = probe
+    carrier = next((p for p in probes if p.teaches in FEATURES and isinstance(p.case.data["message"].get("header"), dict)
+                    and any(c.startswith("encode-") for c in p.case.data["checks"])), None)
+    if carrier is not None and emits:
+        encoding = next(e for e in kind.codec.encodings if e in emits)
+        message = dict(carrier.case.data["message"], header={})
+        jobs.append(Job(suite.name, carrier.case.id, Request(NO_HEADER, "encode", encoding, message=message,
+                                                              params=kind.codec.params(carrier.case.data, "encode", encoding))))
+        by_job[id(jobs[-1])] = carrier
+    wrong_before = len(out.mistakes)
+    try:
+        answered = list(session.run(jobs))
+    except AdapterStartError as exc:
+        out.add([Mistake("no-start", str(exc), "the probes")])
+        return
+    for job, answer in answered:
+        probe = by_job[id(job)]
+        if job.request.check == NO_HEADER:
+            out.add(_no_header(kind, probe, job.request, answer, edition, out))
+            continue
+        result = kind.judge(probe.case.data, edition, job.request, answer)
+        if result.verdict in FINE:
+            continue
+        explained = suite.implementation_errata(probe.case.id, info["errata"], probe.case.data.get("tags", ()))
+        found = _explain(kind, probe, job.request, answer, result, edition)
+        where = f"{job.request.check} of {probe.case.id}"
+        if isinstance(found, list) and found and not explained:
+            out.add(found)
+        else:
+            errata = f" (erratum {', '.join(explained)})" if explained else ""
+            out.findings.append(f"{where}: {result.verdict.value}{errata}: {result.detail}")
+    if len(out.mistakes) == wrong_before:
+        floats = sum(p.teaches in FEATURES for p in probes)
+        out.passed.append(f"{len(jobs)} requests of {len(probes)} probes ({floats} with floats the decoded form spells "
+                          f"its own way, {len(probes) - floats} breaking one rule each"
+                          f"{', one encode without header fields' if carrier is not None and emits else ''}): "
+                          "answered as the contract asks")
+
+
+def _explain(kind, probe: Probe, request: Request, answer: Answer, result, edition: str) -> list[Mistake] | None:
+    """The adapter's mistakes an answer that is not right shows; None when it is the implementation's own result."""
+    where = f"{request.check} of {probe.case.id}"
+    if answer.kind == "timeout":
+        return [Mistake("late", answer.reason, where)]
+    if answer.kind == "rejected":
+        if result.verdict is Verdict.NON_STRICT:
+            breaks = " and ".join(probe.breaks) or probe.teaches
+            return [Mistake("wrong-rule", f"refused naming rule {answer.rule!r}; the input breaks {breaks} only (the "
+                                          f"reference codec, rule by rule): {answer.reason}", where)]
+        if result.verdict is Verdict.ADAPTER_ERROR:
+            return [Mistake("unknown-rule", f"rule {answer.rule!r}: {answer.reason}", where)]
+        return None
+    if answer.kind == "adapter-error":
+        if answer.reason.startswith("adapter failed: "):
+            broken = f" (an input breaking {' and '.join(probe.breaks)})" if probe.breaks else ""
+            return [Mistake("internal", answer.reason + broken, where)]
+        return [Mistake("malformed", answer.reason, where)]
+    if answer.kind != "ok":
+        return None
+    if request.op == "decode" and probe.teaches in FEATURES:
+        found = _decoded(kind, probe, answer.message, edition, where)
+        if found or result.verdict is not Verdict.ADAPTER_ERROR:
+            return found or None
+    if result.verdict is Verdict.ADAPTER_ERROR:
+        return [Mistake("malformed", result.detail, where)]
+    if request.op == "encode" and probe.teaches in FEATURES:
+        return [Mistake("encode-value", f"{FEATURES[probe.teaches]}: {result.detail}", where)]
+    return None
+
+
+def _decoded(kind, probe: Probe, message, edition: str, where: str) -> list[Mistake]:
+    """The mistakes a decoded answer shows: header fields left out, values a JSON writer got wrong."""
+    data = probe.case.data
+    expected = data["message"]
+    out = []
+    if isinstance(message, dict) and isinstance(message.get("header"), dict) and isinstance(expected.get("header"), dict):
+        missing = [k for k in expected["header"] if k not in message["header"]]
+        if missing:
+            out.append(Mistake("header-missing", f"no {', '.join(missing)} in {str(message['header'])[:120]}", where))
+    try:
+        diffs = kind.codec.differences(expected, message, data.get("compare", {}).get("nan_payload", False), edition)
+    except (TypeError, ValueError, KeyError, AttributeError):
+        return out
+    for diff in diffs:
+        code = value_mistake(diff.expected, diff.actual)
+        if code is not None:
+            out.append(Mistake(code, f"{diff.path}: expected {diff.expected!r}, answered {diff.actual!r}", where))
+    return out
+
+
+def _no_header(kind, probe: Probe, request: Request, answer: Answer, edition: str, out: Outcome) -> list[Mistake]:
+    """An encode request whose header gives no field: encoded with the implementation's defaults, or a mistake."""
+    where = f"encode of {probe.case.id} with \"header\": {{}}"
+    if answer.kind == "unsupported":
+        return []
+    if answer.kind != "ok":
+        return [Mistake("header-absent", f"{answer.kind}: {answer.reason}", where)]
+    try:
+        kind.codec.decode(answer.frame, request.encoding, probe.case.data, edition)
+    except (ValueError, KeyError, TypeError) as exc:
+        out.findings.append(f"{where}: encoded to a frame the reference codec refuses ({exc})")
+        return []
+    out.passed.append("an encode request without header fields encoded with the implementation's defaults")
+    return []

@@ -1,0 +1,80 @@
+"""The fixed, short set of corpus cases adapter-check sends, chosen from a suite's own byte vectors by what they hold
+(never by message): per float the decoded form spells in its own way (−0.0, a NaN's bits at each width, the
+infinities, a value needing many digits), the first valid case holding one; per rule of the suite, the first invalid
+case breaking it (one breaking that rule alone where there is one). What each invalid probe breaks is its ``flaws``:
+what the reference codec, with each rule's check switched off in turn, found when the corpus was generated (and
+``generate --check`` proves again).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..core.cases import expectation
+
+# What a valid probe teaches: the feature of a value it holds, in the words adapter-check uses.
+FEATURES = {
+    "negative-zero": "−0.0",
+    "nan-bits-32": "a NaN of a 32-bit float with its own bits (8 hex digits)",
+    "nan-bits-64": "a NaN of a 64-bit float with its own bits (16 hex digits)",
+    "inf": "the infinity \"inf\"",
+    "negative-inf": "the infinity \"-inf\"",
+    "many-digits": "a float needing more than 7 significant digits",
+}
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A corpus case sent as a probe: ``teaches`` a float feature (valid) or a rule (invalid); ``breaks``: the rules an
+    invalid probe's input breaks (any of them is a right rule to name)."""
+
+    case: object  # core.cases.Case
+    teaches: str
+    breaks: tuple[str, ...] = ()
+
+
+def features(value, found: set[str]) -> None:
+    """Add to ``found`` the float features a decoded value holds (iterative: no recursion a value could drive)."""
+    stack = [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, dict):
+            stack.extend(item.values())
+        elif isinstance(item, list):
+            stack.extend(item)
+        elif isinstance(item, float):
+            if item == 0 and math.copysign(1.0, item) < 0:
+                found.add("negative-zero")
+            elif math.isfinite(item) and len(repr(abs(item)).split("e")[0].replace(".", "").strip("0")) > 7:
+                found.add("many-digits")
+        elif isinstance(item, str):
+            if item.startswith("nan:") and len(item) in (12, 20):
+                found.add(f"nan-bits-{32 if len(item) == 12 else 64}")
+            elif item in ("inf", "-inf"):
+                found.add("inf" if item == "inf" else "negative-inf")
+
+
+def choose(cases: list, edition: str, rules: frozenset[str]) -> list[Probe]:
+    """The probes: one valid case per feature (one pinning NaN bits for the NaN features), one invalid case per rule."""
+    valid: dict[str, object] = {}
+    invalid: dict[str, Probe] = {}
+    for case in cases:
+        data = case.data
+        if case.kind != "vector" or not any(c.startswith("decode-") for c in data.get("checks", ())):
+            continue
+        expect = expectation(data, edition)
+        if expect == "valid" and "message" in data:
+            found: set[str] = set()
+            features(data["message"], found)
+            pinned = data.get("compare", {}).get("nan_payload", False)
+            for feature in sorted(found):
+                if feature not in valid and (pinned or not feature.startswith("nan-bits")):
+                    valid[feature] = case
+        elif expect == "invalid" and data.get("rule") in rules:
+            breaks = tuple(data.get("flaws", {}).get("rules", (data["rule"],)))
+            known = invalid.get(data["rule"])
+            if known is None or (len(known.breaks) > 1 and len(breaks) == 1):
+                invalid[data["rule"]] = Probe(case, data["rule"], breaks)
+    out = [Probe(valid[f], f) for f in FEATURES if f in valid]
+    return out + [invalid[r] for r in sorted(invalid)]

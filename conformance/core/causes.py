@@ -1,0 +1,122 @@
+"""Failures grouped by cause across messages: what a reader fixes, rather than what a case id names.
+
+A case that fails (or, NON_STRICT, names the wrong rule) has one cause: what it is about (the rule its input breaks,
+the implementation-defined class it belongs to; else "valid input", whatever value class it exercises, since one
+defect fails valid cases of many classes, or the family of a case of another kind, the third segment of its id) and
+what went wrong with it (accepted what breaks the rule, a check that fails, a crash).
+Cases with the same cause form a group, whatever message they are filed under; groups come largest first, each with
+its cases, its messages and the errata that explain its cases (an implementation without errata gets the same
+groups). Suite-generic: the causes come from the case's data (``rule``, ``class``), or, for a result read back
+without them, from what the result keeps (``rule``, the expectation, the id).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from typing import Callable, Iterable
+
+from .verdicts import Verdict, failing
+
+SHOWN_IN_TITLE = 3  # ops or classes named in a title before "…"
+VERBS = {Verdict.CRASH: "crashes on", Verdict.TIMEOUT: "times out on", Verdict.ADAPTER_ERROR: "adapter error on"}
+
+
+@dataclass(frozen=True)
+class Cause:
+    """One group: ``key`` (stable, e.g. ``accepts/rule:crc``), ``title`` (plain words), its ``cases`` (ids, run
+    order), the ``messages`` they are filed under, ``errata`` (id, cases it explains; most first) and ``verdicts``."""
+
+    key: str
+    title: str
+    cases: tuple[str, ...]
+    messages: tuple[str, ...]
+    errata: tuple[tuple[str, int], ...] = ()
+    verdicts: tuple[tuple[str, int], ...] = ()
+
+    @property
+    def summary(self) -> str:
+        """e.g. "828 cases in 31 messages, first imc/Heartbeat/crc/header-timestamp/le"."""
+        n, m = len(self.cases), len(self.messages)
+        return (f"{n} case{'s' if n != 1 else ''} in {m} message{'s' if m != 1 else ''}, first {self.cases[0]}")
+
+    def to_dict(self) -> dict:
+        return {"key": self.key, "title": self.title, "cases": list(self.cases), "messages": list(self.messages),
+                "errata": dict(self.errata), "verdicts": dict(self.verdicts)}
+
+
+def attended(verdict: Verdict) -> bool:
+    """The verdicts a cause is looked for: every failing one (whatever --strict says) and NON_STRICT."""
+    return failing(verdict, strict=False) or verdict is Verdict.NON_STRICT
+
+
+def about(case, data: dict | None = None) -> tuple[str, str]:
+    """(key, words) of what a case is about: its rule, its class, else "valid input" or its family (a scenario's)."""
+    data = data or {}
+    rule = data.get("rule", case.rule)
+    if rule:
+        return f"rule:{rule}", f"rule {rule}"
+    named = data.get("class")
+    if named:
+        named = "+".join(named) if isinstance(named, list) else named
+        return f"class:{named}", f"class {named}"
+    if case.expect == "valid":  # one defect fails valid cases of every value class: they are one cause
+        return "valid", "valid input"
+    family = case.id.split("/")[2] if case.id.count("/") >= 2 else case.id
+    return f"family:{family}", family
+
+
+def ops(case) -> list[str]:
+    """The operations of the checks that gave the case its verdict (decode, encode, roundtrip, a step's name)."""
+    worst = [c.check for c in case.checks if c.verdict == case.verdict] or [c.check for c in case.checks]
+    return list(dict.fromkeys(check.split("-", 1)[0] for check in worst))
+
+
+def cause_of(case, data: dict | None = None) -> tuple[str, str] | None:
+    """(key, title) of a case's cause, or None for a case that needs none (it passes, or is waived)."""
+    verdict = case.verdict
+    if not attended(verdict):
+        return None
+    if verdict is Verdict.WAIVER_STALE:
+        return "waiver-stale", "waived, but passes now: the waiver must go"
+    key, words = about(case, data)
+    did = "+".join(ops(case)[:SHOWN_IN_TITLE]) or "the case"
+    if verdict in VERBS:
+        return f"{verdict.value.lower()}/{did}/{key}", f"{VERBS[verdict]} {did}: {words}"
+    if verdict is Verdict.NON_STRICT:
+        return f"names-another-rule/{key}", f"refuses, but names another rule than it breaks: {words}"
+    if key.startswith("rule:"):
+        action = "accepts" if did in ("decode", "roundtrip") else "encodes" if did == "encode" else f"{did} passes"
+        return f"accepts/{key}", f"{action} what breaks {words}"
+    if key.startswith("class:"):
+        return f"not-permitted/{key}", f"{did}: an outcome {words} does not permit"
+    return f"fails/{did}/{key}", f"{did} fails on {words}"
+
+
+def group_causes(cases: Iterable, cause: Callable[[object], tuple[str, str] | None] = cause_of,
+                 errata: bool = True) -> list[Cause]:
+    """The cases' causes (``cause(case)``: (key, title) or None), grouped, largest first (then by key)."""
+    groups: dict[str, tuple[str, list]] = {}
+    for case in cases:
+        found = cause(case)
+        if found is not None:
+            groups.setdefault(found[0], (found[1], []))[1].append(case)
+    out = []
+    for key, (title, members) in groups.items():
+        explained = Counter(e for c in members for e in c.errata) if errata else Counter()
+        out.append(Cause(key, title, tuple(c.id for c in members), tuple(dict.fromkeys(c.message for c in members)),
+                         tuple(explained.most_common()), tuple(sorted(Counter(c.verdict.value for c in members).items()))))
+    return sorted(out, key=lambda g: (-len(g.cases), g.key))
+
+
+def regrouped(cases: Iterable, known: Iterable[Cause]) -> list[Cause]:
+    """The groups of ``cases`` as ``known`` groups (read back, or of shards) put them; a case they do not name gets
+    the cause its result alone tells."""
+    named = {case_id: (g.key, g.title) for g in known for case_id in g.cases}
+    return group_causes(cases, lambda case: (named.get(case.id) or cause_of(case)) if attended(case.verdict) else None)
+
+
+def cause_from(doc: dict) -> Cause:
+    """A group as a saved result holds it (its cases are regrouped against the result's own cases on reading)."""
+    return Cause(doc["key"], doc["title"], tuple(doc["cases"]), tuple(doc["messages"]),
+                 tuple(doc.get("errata", {}).items()), tuple(doc.get("verdicts", {}).items()))

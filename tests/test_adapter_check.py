@@ -1,0 +1,89 @@
+"""adapter-check: a deliberately wrong adapter per newcomer's mistake (tests/wrong_adapter.py), each caught with the
+right explanation; the reference codec and the built-in adapters pass (the C++ programs in test_cpp_adapters.py, the
+starters in test_starters.py)."""
+
+from __future__ import annotations
+
+import shlex
+import sys
+from pathlib import Path
+
+import pytest
+
+from imc_conformance.adaptercheck.check import check as check_adapter
+from imc_conformance.adaptercheck.mistakes import CATALOGUE, value_mistake
+from imc_conformance.cli import main
+from imc_conformance.sessions.subprocess import SubprocessSession
+
+WRONG = Path(__file__).resolve().parent / "wrong_adapter.py"
+
+
+def check(capsys, *args: str) -> tuple[int, str]:
+    capsys.readouterr()
+    code = main(["adapter-check", *args])
+    return code, capsys.readouterr().out
+
+
+def wrong(mode: str) -> list[str]:
+    return ["--adapter-cmd", shlex.join([sys.executable, str(WRONG), mode]), "--timeout", "10"]
+
+
+@pytest.mark.parametrize("mode, code, seen", [
+    ("wrong-rule", "wrong-rule", "refused naming rule 'crc'; the input breaks field-overrun only"),
+    ("negative-zero", "negative-zero", "header.timestamp: expected -0.0, answered 0"),
+    ("nan-widened", "nan-widened", "Announce.height: expected 'nan:7fc00001', answered 'nan:7ff8000020000000'"),
+    ("missing-header", "header-missing", "no dst_ent in"),
+    ("header-required", "header-absent", "KeyError: 'timestamp'"),
+    ("out-of-order-batch", "ordering", "is the answer to request"),
+    ("no-name", "hello-fields", "the adapter's hello needs 'implementation'"),
+    ("log-on-stdout", "not-json", "INFO handling hello"),
+    ("unknown-op", "unknown-op", "KeyError: 'adapter-check-unknown-op'"),
+    ("internal-on-accept", "internal", "no message class for id 999 (an input breaking unknown-id)"),
+])
+def test_each_mistake_is_caught_with_its_explanation(capsys, mode, code, seen):
+    status, out = check(capsys, *wrong(mode))
+    what, fix = CATALOGUE[code]
+    assert status == 1, out
+    mistakes = [line for line in out.splitlines() if line.startswith("MISTAKE ")]
+    assert mistakes == [f"MISTAKE 1: {what}" + (mistakes[0][len(f"MISTAKE 1: {what}"):] if mistakes else "")], out
+    assert seen in out and f"  fix:  {fix}" in out
+
+
+@pytest.mark.parametrize("args", [
+    [*wrong("reference")],
+    ["--adapter", "imcpy"], ["--adapter", "pyimclsts"], ["--adapter", "imcpy-shim"], ["--adapter", "pyimclsts-shim"],
+    ["--suite", "ros_acomms", "--adapter", "rosbags"], ["--suite", "ros_acomms", "--adapter", "reference-handler"],
+])
+def test_the_reference_and_the_built_in_adapters_speak_the_contract(capsys, args):
+    status, out = check(capsys, *args)
+    assert status == 0 and "MISTAKE" not in out and "the adapter speaks the contract" in out, out
+
+
+def test_output_held_back_until_the_input_ends_is_explained(suite, cases):
+    """A program whose answers wait in a buffer answers hello only once its input is closed, whatever the wait (it
+    never answers before): adapter-check closes it after the hello's bound and names the buffering."""
+    session = SubprocessSession([sys.executable, str(WRONG), "unflushed"], name="unflushed", encoding_param="byte_order",
+                                hello_timeout=1)
+    try:
+        outcome = check_adapter(session, suite, cases, "imc-5.4.30", timeout=10)
+    finally:
+        session.close()
+    assert [m.code for m in outcome.mistakes] == ["unflushed"]
+    assert '"implementation": "hostile reference codec"' in outcome.mistakes[0].seen
+
+
+def test_an_adapter_that_cannot_start_is_explained(capsys, tmp_path):
+    status, out = check(capsys, "--adapter-cmd", str(tmp_path / "no-such-program"))
+    assert status == 1 and "MISTAKE 1: the adapter could not be started or reached" in out
+
+
+@pytest.mark.parametrize("expected, actual, code", [
+    (-0.0, 0, "negative-zero"), (-0.0, 0.0, "negative-zero"), (-0.0, -0.0, None),
+    ("nan:7fc00001", "nan:7ff8000020000000", "nan-widened"), ("nan:7f800001", "nan:7fc00001", "nan-quieted"),
+    ("nan:7fc00001", "nan:0100c07f", "nan-bytes"), ("nan:7fc00001", "nan", "nan-word"), ("nan:7fc00001", None, "nan-word"),
+    ("inf", "Infinity", "inf-word"), (3.4028234663852886e38, 3.40282e38, "float-digits"), (1.5, 2.5, None),
+    (1.5, 10 ** 400, None),
+    ("nan:7fc00001", "nan:zz", None),
+])
+def test_value_mistakes_are_told_apart(expected, actual, code):
+    assert value_mistake(expected, actual) == code

@@ -1,0 +1,76 @@
+"""The starters (adapters/starters: Java with Jackson, Go with encoding/json, Rust with serde_json, C with cJSON), built
+once into the cache (tests/starter_builds.py): their value helpers write and read back every float class at both
+widths to the bit (−0.0, NaN payloads, a signalling fp32 NaN, subnormals, fp32 digits) and hex; each passes
+adapter-check; a run through each is all UNSUPPORTED, without an adapter error."""
+
+from __future__ import annotations
+
+import json
+import shlex
+import struct
+import subprocess
+
+import pytest
+
+from imc_conformance.cli import main
+from imc_conformance.kinds.vector.floats import FLOAT_CLASSES, float_from_bits, same_float
+
+from starter_builds import LANGUAGES, built
+
+EXTRA_BITS = {4: ["7f800001", "ff800001", "3dcccccd", "40490fdb", "00000000"],  # signalling NaNs, 0.1, pi
+              8: ["7ff0000000000001", "3fb999999999999a", "400921fb54442d18", "41d954fc40200000"]}
+
+
+def bits_of(value, width: int) -> str:
+    """The hex bits of a FLOAT_CLASSES value at ``width`` bytes."""
+    if isinstance(value, str):
+        number = {"nan": float("nan"), "inf": float("inf"), "-inf": float("-inf")}.get(value)
+        if number is None:  # "nan:<hex>"
+            return value[4:]
+        value = number
+    return struct.pack(">" + ("f" if width == 4 else "d"), value).hex()
+
+
+def probes() -> list[dict]:
+    out = []
+    for width, column in ((4, 0), (8, 1)):
+        wanted = [bits_of(values[column], width) for values in FLOAT_CLASSES.values()] + EXTRA_BITS[width]
+        out += [{"width": width, "bits": b} for b in dict.fromkeys(wanted)]
+    return out
+
+
+@pytest.fixture(scope="module", params=LANGUAGES)
+def starter(request) -> list[str]:
+    return built(request.param)
+
+
+def test_the_value_helpers_write_every_float_class_to_the_bit(starter):
+    asked = probes() + [{"hex": "00ffAB10"}, {"hex": ""}]
+    done = subprocess.run([*starter, "--values"], input="".join(json.dumps(p) + "\n" for p in asked), text=True,
+                          capture_output=True, timeout=60)
+    answers = [json.loads(line) for line in done.stdout.splitlines()]
+    assert len(answers) == len(asked), done.stderr
+    for probe, answer in zip(asked, answers):
+        if "hex" in probe:
+            assert answer == {"hex": probe["hex"].lower()}
+            continue
+        width, bits = probe["width"], int(probe["bits"], 16)
+        expected = float_from_bits(bits, width)
+        assert same_float(expected, answer["value"], width, nan_payload=True), (probe, answer)
+        assert type(answer["value"]) is type(expected) or isinstance(expected, float) and isinstance(answer["value"], float), (probe, answer)
+        assert int(answer["bits"], 16) == bits, (probe, answer)  # read back from what it wrote
+
+
+def test_a_starter_passes_adapter_check(starter, capsys):
+    assert main(["adapter-check", "--adapter-cmd", shlex.join(starter), "--timeout", "30"]) == 0
+    out = capsys.readouterr().out
+    assert "MISTAKE" not in out and "the adapter speaks the contract" in out
+
+
+def test_a_run_through_a_starter_is_all_unsupported(starter, tmp_path, capsys):
+    report = tmp_path / "starter.json"
+    code = main(["run", "--adapter-cmd", shlex.join(starter), "--no-progress", "--timeout", "30", "--json", str(report)])
+    doc = json.loads(report.read_text())
+    assert code == 2 and doc["exit_code"] == 2  # nothing tested: every case UNSUPPORTED
+    assert set(doc["summary"]) == {"UNSUPPORTED"} and doc["summary"]["UNSUPPORTED"] > 4000
+    assert not doc["incidents"] and not doc["causes"]
