@@ -2,7 +2,10 @@
 content of their sources, whoever asks (pytest-xdist workers wait for the one that builds). Everything downloaded
 comes from the registries, into the cache too: Maven Central (Jackson) into a Maven repository of its own, crates.io
 (serde_json) into a CARGO_HOME of its own, Debian's cJSON with apt-get download; Go's starter needs only its
-standard library. Returns the command line that runs a starter."""
+standard library. Returns the command line that runs a starter. A toolchain this user cannot run (absent from
+PATH, or installed where only another user can read, as rustup under /root is for CI's normal user) is
+ToolchainMissing, which the tests skip with its reason unless IMC_CONFORMANCE_REQUIRE_STARTERS is set (CI's run as
+root, where every toolchain must build its starter)."""
 
 from __future__ import annotations
 
@@ -20,12 +23,23 @@ JVM = ["-Xmx256m", "-Xss1m", "-XX:+UseSerialGC", "-XX:ReservedCodeCacheSize=64m"
        "-XX:TieredStopAtLevel=1"]
 
 
+TOOLS = {"java": ("mvn", "java"), "go": ("go",), "rust": ("cargo",), "c": (os.environ.get("CC", "cc"),)}
+
+
+class ToolchainMissing(Exception):
+    """A starter's toolchain is not runnable by this user."""
+
+
 def sources(language: str) -> Path:
     return adapter_sources().parent / "starters" / language
 
 
 def built(language: str) -> list[str]:
     """The argv of the starter of ``language``, built on first use into ``<cache>/starters``."""
+    unusable = [tool for tool in TOOLS[language] if shutil.which(tool) is None]
+    if unusable:
+        raise ToolchainMissing(f"the {language} starter needs {', '.join(unusable)}, which this user cannot run "
+                               "(not on PATH, or not executable here)")
     source = sources(language)
     files = sorted(p for p in source.rglob("*") if p.is_file())
     key = digest(*files, [str(p.relative_to(source)) for p in files])
