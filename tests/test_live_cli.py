@@ -173,7 +173,7 @@ def test_serve_and_run_agree_over_loopback(node, tmp_path, capsys):
                  "--time-scale", "2", "--json", str(path)])
     doc = json.loads(path.read_text())
     assert code == 0, capsys.readouterr().out
-    assert set(doc["summary"]) == {"PASS"} and doc["summary"]["PASS"] >= 15
+    assert set(doc["summary"]) <= {"PASS", "IMPL_DEFINED"} and doc["summary"]["PASS"] >= 15  # readings it takes
     assert "profile: seed" in doc["notes"] and any(n.startswith("parameters: peer=imc-peer-1") for n in doc["notes"])
 
 

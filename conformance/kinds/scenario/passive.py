@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from ...capture.findings import Finding, Watched
 from ...core.verdicts import Verdict
-from .exchanges import States, resolved, silence_allowed, states_for, weaker
+from .exchanges import States, resolved, seconds, silence_allowed, states_for, weaker
 from .matchers import hashable, same, show
 from .wire import Parsed
 
@@ -51,10 +51,12 @@ class _Open:
 
 
 class PassiveExchanges:
-    """A tracker of one capture's exchanges. ``anyone``: the system id meaning "no system in particular"."""
+    """A tracker of one capture's exchanges. ``anyone``: the system id meaning "no system in particular";
+    ``bounds``: the suite's timing bounds, which exchanges name."""
 
-    def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None):
-        self.wire, self.anyone, self.edition = wire, anyone, edition
+    def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None,
+                 bounds: dict | None = None):
+        self.wire, self.anyone, self.edition, self.bounds = wire, anyone, edition, bounds or {}
         self.state_cache: dict[tuple, States] = {}
         self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
         self.by_request: dict[str, list[_Rule]] = {}
@@ -298,7 +300,8 @@ class PassiveExchanges:
 
         return _Rule(ex, values(ex["request"]["message"], ex["request"].get("when", {})),
                      values(ex["reply"], ex.get("reply_when", {})),
-                     [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex, ex["within"] * scale)
+                     [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex,
+                     seconds(ex["within"], self.bounds) * scale)
 
 
 def _matches(fields: dict, when: dict[str, frozenset]) -> bool:
