@@ -281,6 +281,26 @@ def test_every_testable_statement_is_covered_and_every_live_case_covers_one(suit
             and not any(s.get("covers") or s.get("exercises") for s in c.get("steps", ()))] == []
 
 
+def test_what_the_exchanges_name_exists(suite, cases):
+    """Every ambiguity the exchange rules name is in the register, every bound an exchange, step or probe names is in
+    the register of bounds (the lint refuses a bare number in a suite that has one), every capability has a service."""
+    behaviour = suite.behaviour
+    named = [r["ambiguity"] for r in behaviour["silence"]]
+    for ex in behaviour["exchanges"]:
+        named += [r["ambiguity"] for r in ex.get("silence", ())]
+        state = ex.get("state", {})
+        for states in (state, *state.get("by_request", {}).get("values", {}).values()):
+            named += [*states.get("open", {}).values(), *([states["unknown"]] if "unknown" in states else ())]
+        assert ex["within"] in behaviour["bounds"], ex["id"]
+    assert named and set(named) <= set(behaviour["ambiguities"])
+    assert {c["service"] for c in behaviour["capabilities"].values()} == set(behaviour["services"])
+    probes = [c.data["probe"] for c in cases if c.kind == "robustness"]
+    assert probes and all(p["within"] in behaviour["bounds"] for p in probes)
+    case = next(c.data for c in cases if c.id == "imc/LblConfig/scenario/get-cfg")
+    problem = suite.live_problem("scenario", dict(case, steps=[case["steps"][0], dict(case["steps"][1], within=5)]))
+    assert problem[0] == ".steps[1].within" and "names its source" in problem[1]
+
+
 def test_a_step_may_not_cover_an_unknown_or_untestable_statement(suite, cases):
     case = next(c.data for c in cases if c.id == "imc/LblConfig/scenario/get-cfg")
     for sid, why in (("LblConfig.nothing", "not a statement"), ("LblRange.notify", "marked untestable")):
