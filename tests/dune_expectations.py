@@ -30,7 +30,7 @@ DEFECTS = {  # case -> (verdict under both profiles, words its detail must hold)
     "imc/AcousticOperation/scenario/unsupported-op": ("NON_STRICT", "no AcousticOperation"),
     "imc/HistoricDataQuery/scenario/sample-priority": ("FAIL", "holds {'abbrev': 'LblRange'"),  # DataStore.hpp:121-146
     "imc/Heartbeat/robustness/still-served": ("FAIL", "imc/HistoricData/"),  # DataStore.hpp:139-143: a wrong-typed sample
-    # Navigation/General/LBL/Task.cpp:245-256: a SET_CFG is applied whatever its destination (UDP/Listener.hpp:146-153)
+    # DUNE/Navigation/BasicNavigation.cpp:706-717: a SET_CFG is applied whatever its destination (UDP/Listener.hpp:146-153)
     "imc/LblConfig/scenario/set-for-another-system": ("NON_STRICT", "imc-conformance-elsewhere"),
 }
 READINGS = {  # case -> the open reading (ambiguities.json) DUNE takes: IMPL_DEFINED, never a failure

@@ -52,11 +52,13 @@ class _Open:
 
 class PassiveExchanges:
     """A tracker of one capture's exchanges. ``anyone``: the system id meaning "no system in particular";
-    ``bounds``: the suite's timing bounds, which exchanges name."""
+    ``nobody``: a destination no system answers for (a request to it is addressed elsewhere); ``bounds``: the suite's
+    timing bounds, which exchanges name; ``silence``: the rules under which any request may go unanswered."""
 
     def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None,
-                 bounds: dict | None = None):
+                 bounds: dict | None = None, nobody: int | None = None, silence=()):
         self.wire, self.anyone, self.edition, self.bounds = wire, anyone, edition, bounds or {}
+        self.nobody, self.silence = nobody, tuple(silence)
         self.state_cache: dict[tuple, States] = {}
         self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
         self.by_request: dict[str, list[_Rule]] = {}
@@ -199,7 +201,7 @@ class PassiveExchanges:
         anyone, sender = self.anyone, w.src
         for o in mine:  # oldest first
             node = o.request.dst
-            if (sender == o.request.src) if node is None or node == anyone else (sender != node):
+            if (sender == o.request.src) if node in (None, anyone, self.nobody) else (sender != node):
                 continue  # not from the system the request was for (see _from_node)
             if o.request.src == w.dst:
                 if not o.answered:
@@ -213,7 +215,7 @@ class PassiveExchanges:
     def _from_node(self, o: _Open, w: Watched) -> bool:
         """Whether ``w`` comes from the system the request was for (any other than the requester, for a request
         to no system in particular)."""
-        if o.request.dst in (None, self.anyone):
+        if o.request.dst in (None, self.anyone, self.nobody):
             return w.src != o.request.src
         return w.src == o.request.dst
 
@@ -254,7 +256,8 @@ class PassiveExchanges:
                 return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
                                       f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
-            silent = silence_allowed(self.wire, ex, o.request.fields, self.edition)
+            facts = {"to": "elsewhere" if o.request.dst == self.nobody else None}
+            silent = silence_allowed(self.wire, ex, o.request.fields, self.edition, facts, self.silence)
             if silent is not None:  # the seeds define no reply to this request: an open reading, never a failure
                 return [self._finding(o, f"reading/{silent}", Verdict.IMPL_DEFINED, ex["clause"],
                                       f"no {ex['reply']} {self._between(o)} within {bound:g} s (open reading {silent})",
