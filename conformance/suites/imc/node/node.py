@@ -1,6 +1,9 @@
 """The reference node: what the seeds say a node does, sans-IO (the caller says what time it is and moves the
 datagrams). It behaves like DUNE where the seeds are silent: it talks only to systems that announced an
-``imc+udp`` service, heart-beats to them at 1 Hz and announces itself to them (unicast only) every 10 s. A
+``imc+udp`` service, heart-beats to them at 1 Hz and announces itself to them (unicast only) every 10 s; unlike DUNE
+it acts only on requests addressed to it or to anyone (0xFFFF), and, like DUNE, takes no datagram carrying its own id
+as a request (its own, heard back, or a forgery). A capability given in ``only_to_itself`` is served to its own system
+alone (DUNE serves AcousticRequest so). A
 hostile link cannot stall it: a service naming a host rather than an address is ignored (nothing is ever
 resolved), a contact not heard from for ``CONTACT_TTL`` seconds is forgotten and at most ``MAX_CONTACTS`` are
 kept (a flood of spoofed Announces cannot push out a contact that keeps talking), and a frame the reference
