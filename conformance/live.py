@@ -74,7 +74,7 @@ def notes(args, options: dict) -> list[str]:
         return []
     out = [f"profile: {options['profile']['name']}"]
     if "claims" in options:
-        out.append(f"claims ({args.claims}): {', '.join(sorted(options['claims'])) or 'no service'}")
+        out.append(f"claims ({args.claims}): {claimed(options['claims'])}")
     if options["params"]:
         out.append("parameters: " + ", ".join(f"{k}={v}" for k, v in options["params"].items()))
     if options["effects"]:
@@ -82,6 +82,12 @@ def notes(args, options: dict) -> list[str]:
     if options["time_scale"] != 1.0:
         out.append(f"time bounds scaled by {options['time_scale']:g}")
     return out
+
+
+def claimed(claims: dict) -> str:
+    """What a run's claims say, for a report's notes."""
+    return ", ".join(f"{name}{' (only to itself)' if scope == 'self' else ''}" for name, scope in sorted(claims.items())) \
+        or "nothing"
 
 
 def dry_run(suite, cases, args, options) -> int:
@@ -124,12 +130,14 @@ def list_live_cases(suite, cases) -> int:
     for case in (c for c in cases if hasattr(suite.kinds[c.kind], "admit")):
         d = case.data
         print(f"{case.id}\tneeds: {','.join(d.get('needs', ())) or '-'}\teffects: {','.join(d.get('effects', ())) or '-'}"
-              f"\tservice: {d.get('service', '-')}\t{d['clause']}")
+              f"\tcapability: {d.get('capability', '-')}\t{d['clause']}")
     print("# parameters (--param NAME=VALUE):")
     for name, p in behaviour["params"].items():
         print(f"#   {name}: {p['description']} ({p['type']}, e.g. {p['example']})")
     print(f"# effects (--allow-effects all or a list): {', '.join(behaviour['effects'])}")
-    print(f"# services (--claims FILE): {', '.join(behaviour['services'])}")
+    print("# capabilities (--claims FILE: services claim all of theirs; capabilities: any, self or none):")
+    for name, c in behaviour["capabilities"].items():
+        print(f"#   {name} (service {c['service']}): {c['description']}")
     return 0
 
 

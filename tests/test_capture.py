@@ -262,6 +262,15 @@ def test_an_unanswered_request_fails_with_its_frame_and_time():
     assert "no AcousticStatus from system 30 to 19696 within 20 s" in case.checks[1].detail and "at 0.000000 s" in case.checks[1].detail
 
 
+def test_a_request_to_system_0_is_for_no_system_in_particular():
+    """System 0 names no system (DUNE addresses its Announce to it): any node's reply answers a request to it, and none
+    at all is the open reading addressed-elsewhere, never a FAIL."""
+    answered = exchange((0, STATION, request(dst=0)), (0.5, VEHICLE, status("SENT")), end=30)
+    assert answered[f"{EX}/answered"].verdict is Verdict.PASS
+    silent = exchange((0, STATION, request(dst=0)), end=30)
+    assert silent[f"{EX}/reading/addressed-elsewhere"].verdict is Verdict.IMPL_DEFINED and f"{EX}/answered" not in silent
+
+
 def test_a_capture_ending_before_the_bound_is_inconclusive():
     assert exchange((0, STATION, request()), end=3)[f"{EX}/answered"].verdict is Verdict.INCONCLUSIVE
 

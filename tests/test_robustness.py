@@ -33,7 +33,8 @@ def test_the_reference_node_survives_every_frame_and_the_garbage(suite, referenc
     assert len(probes) == 8 and {c.id for c in result.cases} == {c.id for c in probes}
     assert {c.id: c.detail for c in result.cases if c.verdict is not Verdict.PASS} == {}
     for case in result.cases:
-        assert [k.check for k in case.checks] == ["probe:baseline", "probe:corpus", "probe:garbage"]
+        assert [k.check for k in case.checks] == ["probe:baseline", "probe:corpus", "probe:hostile", "probe:garbage"]
+        assert "after each of the 8 hostile blocks" in case.checks[2].detail
     assert result.exit_code() == 0 and link.restarts == 0
     phase = suite.kinds["robustness"].phase(suite.editions[0], {"corpus": tuple(c for c in cases if c.kind == "vector"),
                                                                 "replay_effects": True})
@@ -195,3 +196,33 @@ def test_a_restart_that_does_not_restore_the_service_stops_the_bisection(suite, 
                        adapter="virtual", options=options, clock=link.now)
     case = by_id(result)[ACOUSTIC[0]]
     assert case.verdict is Verdict.FAIL and "not bisected: after a restart the node did not serve" in case.detail
+
+
+@pytest.mark.parametrize("broken, silenced, block", [("dies-on-own-id", ACOUSTIC, "from-own-id"),
+                                                     ("exhausted-by-many", None, "many-at-once")])
+def test_a_node_silenced_by_everyday_traffic_names_the_hostile_block(suite, cases, broken, silenced, block):
+    """Valid requests of the kinds UDP brings every day (addressed elsewhere, from the node's own id or an unannounced
+    system, duplicated, reusing one id, many at once): a node they silence fails the probes, naming the block."""
+    result, link = run_virtual(suite, cases, kinds=ROBUSTNESS, restartable=True, broken=broken)
+    failed = {c.id: c for c in result.cases if c.verdict is Verdict.FAIL}
+    assert failed and (silenced is None or set(failed) == set(silenced))
+    for case in failed.values():
+        hostile = next(k for k in case.checks if k.check == "probe:hostile")
+        assert hostile.verdict is Verdict.FAIL and f"after the hostile block {block} (" in hostile.detail
+        assert next(k for k in case.checks if k.check == "probe:corpus").verdict is Verdict.PASS
+    assert link.restarts >= 1  # brought back to go on, and left as it was found
+
+
+def test_the_hostile_blocks_send_what_their_kinds_say(suite, cases, reference):
+    _, link = reference
+    flood = [suite.wire.parse(d).decoded for d in link.sent]
+    flood = [d for d in flood if d is not None and d["header"]["src_ent"] == 254 and d["abbrev"] != "Announce"]
+    node = 0x00A0
+    dsts = Counter(d["header"]["dst"] for d in flood if d["header"]["src"] == 0x4CF0)
+    assert dsts[0xFFFF] and dsts[0] and any(dst not in (0, 0xFFFF, node) for dst in dsts)
+    assert any(d["header"]["src"] == node for d in flood)  # from the node's own id
+    assert any(d["header"]["src"] not in (0x4CF0, node) and d["header"]["dst"] == node for d in flood)  # unannounced
+    queries = [d for d in flood if d["abbrev"] == "HistoricDataQuery" and d["fields"]["type"] == 1]
+    ids = Counter(d["fields"]["req_id"] for d in queries)
+    assert max(ids.values()) >= 3 and len(ids) >= 100  # one id reused, and many at once each with its own
+

@@ -5,10 +5,12 @@ checks its rule, with the right message named, and loss and duplication are abso
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
 from imc_conformance.core.verdicts import Verdict
+from imc_conformance.kinds.scenario.options import claims
 from imc_conformance.render import RENDERERS
 from imc_conformance.suites.imc.node import BREAKS, VARIANTS
 from live_harness import EVERYTHING, PARAMS, run_virtual, scenario_cases
@@ -51,6 +53,23 @@ CAUGHT = {
     "ignores-remote-commands": ("imc/RemoteCommand/scenario/executed", "NON_STRICT"),
     "acknowledges-set-cfg": ("imc/LblConfig/scenario/set-then-get", "NON_STRICT"),
     "leaks-on-drop": ("imc/AcousticSystemsQuery/robustness/still-served", "FAIL"),
+    "list-empty-items": ("imc/AcousticSystemsQuery/scenario/reply", "NON_STRICT"),
+    "two-replies": ("imc/AcousticSystemsQuery/scenario/reply", "NON_STRICT"),
+    "ignores-anyone": ("imc/AcousticSystemsQuery/scenario/to-anyone", "NON_STRICT"),
+    "acts-on-others-requests": ("imc/LblConfig/scenario/set-for-another-system", "NON_STRICT"),
+    "trusts-own-id": ("imc/LblConfig/scenario/spoofed-own-source", "NON_STRICT"),
+    "rounds-beacons": ("imc/LblConfig/scenario/set-then-get", "NON_STRICT"),
+    "reused-id-cancels": ("imc/AcousticRequest/scenario/reused-id", "FAIL"),
+    "drops-when-many": ("imc/HistoricDataQuery/scenario/many-at-once", "FAIL"),
+    "rewrites-producer": ("imc/HistoricDataQuery/scenario/keeps-producer", "NON_STRICT"),
+    "executes-others-commands": ("imc/RemoteCommand/scenario/not-executed-for-another", "NON_STRICT"),
+    "late-ok": ("imc/IridiumMsgTx/scenario/ttl", "FAIL"),
+    "no-group-report": ("imc/SystemGroup/scenario/set-then-request", "NON_STRICT"),
+    "forwards-as-own": ("imc/RemoteCommand/scenario/forwarded-to-recipient", "NON_STRICT"),
+    "unknown-system-type": ("imc/Announce/scenario/well-formed", "NON_STRICT"),
+    "replies-to-every-client": ("imc/AcousticSystemsQuery/scenario/two-clients", "NON_STRICT"),
+    "dies-on-own-id": ("imc/AcousticRequest/robustness/still-served", "FAIL"),
+    "exhausted-by-many": ("imc/HistoricDataQuery/robustness/still-served", "FAIL"),
 }
 
 
@@ -58,10 +77,15 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "sent-before-range-received": {"sent-in-a-range"},
     "busy-then-completes": {"busy-ends-request"},
     "queued-first": set(),
-    "silent-where-allowed": {"reverse-range-reply", "msg-short-reply", "msg-without-message"},
+    "silent-where-allowed": {"reverse-range-reply", "msg-short-reply", "msg-without-message",
+                             "request-reverse-range-reply"},
     "old-unsupported-code": {"status-outside-the-table"},
     "slow-announce": {"announce-period"},
     "msg-to-unreachable-done": set(),
+    "silent-to-unknown-systems": {"unknown-system-reply"},
+    "declines-reverse-range": set(),  # declining is shown as UNSUPPORTED, not as a reading
+    "answers-queries-for-others": set(),  # it answers where the reference node leaves the query (addressed-elsewhere)
+    "trusts-unannounced": {"unannounced-sender"},
 }
 
 
@@ -152,11 +176,12 @@ def test_effects_are_opt_in_and_the_report_says_what_was_skipped(suite, cases):
     assert "imc/LblConfig/scenario/set-then-get" in {c.id for c in some.cases}
 
 
-def test_unclaimed_services_are_unsupported_and_claimed_silence_fails(suite, cases):
-    options = dict(EVERYTHING, claims={"discovery", "lbl"})
+def test_unclaimed_capabilities_are_not_claimed_and_claimed_silence_fails(suite, cases):
+    options = dict(EVERYTHING, claims=claims(suite.behaviour, {"services": ["discovery", "lbl"]}))
     result, _ = run_virtual(suite, cases, options=options)
     by_id = {c.id: c for c in result.cases}
-    assert by_id["imc/SmsTx/scenario/state"].verdict is Verdict.UNSUPPORTED
+    sms = by_id["imc/SmsTx/scenario/state"]
+    assert sms.verdict is Verdict.UNSUPPORTED and "not claimed: sms" in sms.detail
     assert by_id["imc/LblConfig/scenario/get-cfg"].verdict is Verdict.PASS
     by_message = {m.name: m.verdict for m in result.messages}
     assert by_message["SmsTx"] == "UNSUPPORTED" and by_message["LblConfig"] == "PASS"  # nothing passed for SmsTx
@@ -164,9 +189,42 @@ def test_unclaimed_services_are_unsupported_and_claimed_silence_fails(suite, cas
     assert {c.id: c.verdict for c in silent.cases}["imc/LblConfig/scenario/get-cfg"] is Verdict.FAIL
 
 
+def test_a_capability_served_only_to_the_node_itself_is_not_claimed_for_the_suite(suite, cases):
+    """A node that serves AcousticRequest only to its own system (as DUNE does: a local API) fails every
+    AcousticRequest scenario unless its claims say so; with them, those cases are not claimed (never PASS, never
+    FAIL) and the rest of the acoustic service is judged as usual, even under --strict."""
+    kinds = ("scenario", "robustness")
+    local = {"only_to_itself": ("acoustic-request",)}
+    unclaimed, _ = run_virtual(suite, cases, kinds=kinds, **local)
+    request = [c for c in unclaimed.cases if c.id.startswith("imc/AcousticRequest/")]
+    assert request and {c.verdict for c in request} >= {Verdict.FAIL}
+    doc = {"services": sorted(suite.behaviour["services"]), "capabilities": {"acoustic-request": "self"}}
+    result, _ = run_virtual(suite, cases, options=dict(EVERYTHING, claims=claims(suite.behaviour, doc)), strict=True,
+                            kinds=kinds, **local)
+    request = [c for c in result.cases if c.id.startswith("imc/AcousticRequest/")]
+    assert len(request) == len([c for c in cases if c.id.startswith("imc/AcousticRequest/") and c.kind in kinds])
+    assert {c.verdict for c in request} == {Verdict.UNSUPPORTED}
+    assert all("only to its own system" in c.detail for c in request)
+    assert {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED)
+            and not c.id.startswith("imc/AcousticRequest/")} == {}
+    assert {m.name: m.verdict for m in result.messages}["AcousticOperation"] in ("PASS", "IMPL_DEFINED")
+
+
+def test_claims_are_checked_against_the_vocabulary(suite):
+    for doc, says in (({"services": ["telepathy"]}, "unknown service 'telepathy'"),
+                      ({"capabilities": {"telepathy": "any"}}, "unknown capability 'telepathy'"),
+                      ({"capabilities": {"acoustic-request": "sometimes"}}, "is not one of any, self, none"),
+                      ({}, 'expected {"services"'), ({"capabilities": ["acoustic-request"]}, 'expected {"services"')):
+        with pytest.raises(ValueError, match=re.escape(says)):
+            claims(suite.behaviour, doc)
+    both = claims(suite.behaviour, {"services": ["acoustic"], "capabilities": {"acoustic-request": "none",
+                                                                             "system-group": "self"}})
+    assert both == {"acoustic-operation": "any", "acoustic-systems": "any", "system-group": "self"}
+
+
 def test_a_target_claiming_nothing_the_cases_check_exits_2(suite, cases):
     only_sms = [c for c in cases if c.id.startswith("imc/SmsTx/")]
-    result, _ = run_virtual(suite, only_sms, options=dict(EVERYTHING, claims={"lbl"}))
+    result, _ = run_virtual(suite, only_sms, options=dict(EVERYTHING, claims={"lbl-configuration": "any"}))
     assert {c.verdict for c in result.cases} == {Verdict.UNSUPPORTED}
     assert result.exit_code() == 2  # nothing was tested: never a green run
 
@@ -221,6 +279,26 @@ def test_every_testable_statement_is_covered_and_every_live_case_covers_one(suit
     assert len(suite.statements) >= 70 and [s for s in testable if s not in covered] == []
     assert [c["id"] for c in live if not c.get("covers")
             and not any(s.get("covers") or s.get("exercises") for s in c.get("steps", ()))] == []
+
+
+def test_what_the_exchanges_name_exists(suite, cases):
+    """Every ambiguity the exchange rules name is in the register, every bound an exchange, step or probe names is in
+    the register of bounds (the lint refuses a bare number in a suite that has one), every capability has a service."""
+    behaviour = suite.behaviour
+    named = [r["ambiguity"] for r in behaviour["silence"]]
+    for ex in behaviour["exchanges"]:
+        named += [r["ambiguity"] for r in ex.get("silence", ())]
+        state = ex.get("state", {})
+        for states in (state, *state.get("by_request", {}).get("values", {}).values()):
+            named += [*states.get("open", {}).values(), *([states["unknown"]] if "unknown" in states else ())]
+        assert ex["within"] in behaviour["bounds"], ex["id"]
+    assert named and set(named) <= set(behaviour["ambiguities"])
+    assert {c["service"] for c in behaviour["capabilities"].values()} == set(behaviour["services"])
+    probes = [c.data["probe"] for c in cases if c.kind == "robustness"]
+    assert probes and all(p["within"] in behaviour["bounds"] for p in probes)
+    case = next(c.data for c in cases if c.id == "imc/LblConfig/scenario/get-cfg")
+    problem = suite.live_problem("scenario", dict(case, steps=[case["steps"][0], dict(case["steps"][1], within=5)]))
+    assert problem[0] == ".steps[1].within" and "names its source" in problem[1]
 
 
 def test_a_step_may_not_cover_an_unknown_or_untestable_statement(suite, cases):
@@ -344,9 +422,14 @@ def test_every_variant_has_its_readings_listed():
 @pytest.mark.parametrize("edition", ["imc-5.4.30", "imc-5.4.11"])
 def test_a_node_taking_another_reading_the_seeds_allow_gets_no_failure(suite, cases, variant, edition):
     """Proof the other way: a correct node that reads an open clause otherwise (ambiguities.json) is never FAILed,
-    not even under --strict; each reading it takes is shown as an IMPL_DEFINED check naming the register's entry."""
+    not even under --strict; each reading it takes is shown as an IMPL_DEFINED check naming the register's entry, and
+    a request it declines where the seeds let it (UNSUPPORTED) shows the case UNSUPPORTED, declining."""
     result, _ = run_virtual(suite, cases, edition, variant=variant, strict=True)
-    assert {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED)} == {}
+    declined = {c.id for c in result.cases if c.verdict is Verdict.UNSUPPORTED
+                and any(k.check.endswith(":declined") and k.verdict is Verdict.UNSUPPORTED for k in c.checks)}
+    assert bool(declined) == (variant == "declines-reverse-range") and all("reverse-range" in c for c in declined)
+    assert {c.id: c.detail for c in result.cases
+            if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED) and c.id not in declined} == {}
     taken = {k.check.split(":reading-", 1)[1] for c in result.cases for k in c.checks if ":reading-" in k.check}
     reference, _ = run_virtual(suite, cases, edition)
     assert [c.timeline for c in result.cases] != [c.timeline for c in reference.cases]  # the variant took effect

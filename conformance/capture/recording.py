@@ -56,7 +56,7 @@ def about_run(suite: str, edition: str, case_ids: list[str], options: dict, targ
     return {"suite": suite, "edition": edition, "cases": case_ids, "target": target, "src": src, "dst": dst,
             "startup": startup, **({"first_unique": first_unique} if first_unique is not None else {}), "params": options.get("params", {}), "effects": sorted(options.get("effects", ())),
             "time_scale": options.get("time_scale", 1.0), "profile": options["profile"]["name"],
-            "claims": sorted(options["claims"]) if "claims" in options else None}
+            "claims": dict(sorted(options["claims"].items())) if "claims" in options else None}
 
 
 def read_about(sections: list[str]) -> dict | None:
@@ -103,6 +103,7 @@ def _problem(about) -> str | None:
                 or not math.isfinite(value):
             return f"{key} is not a number of seconds in (0, {bound:g}]"
     claims = about.get("claims")
-    if claims is not None and not (isinstance(claims, list) and all(isinstance(c, str) for c in claims)):
-        return "claims must be null or a list of text"
+    if claims is not None and not (isinstance(claims, list) and all(isinstance(c, str) for c in claims)
+                                   or isinstance(claims, dict) and all(isinstance(c, str) for c in claims.values())):
+        return "claims must be null, a list of services (older recordings) or capabilities mapped to text"
     return None

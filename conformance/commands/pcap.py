@@ -193,6 +193,7 @@ def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, comp
     ValueError if the recording cannot be."""
     from ..core.runner import run_cases
     from ..files import open_corpus
+    from ..kinds.scenario import options as vocabulary
     from ..live import check_params
     from ..capture.recording import OWN, RECEIVED
     from ..sessions.replay import Recorded, ReplayLink
@@ -210,8 +211,13 @@ def replay(about: dict, datagrams: list, strict: bool, messages: frozenset, comp
     options = {"params": dict(about["params"]), "effects": set(about["effects"]), "time_scale": about["time_scale"],
                "profile": profile, "robustness": False, "restart": False, "replay_effects": False,
                "corpus": tuple(c for c in everything if c.kind == "vector")}
-    if about["claims"] is not None:
-        options["claims"] = set(about["claims"])
+    if about["claims"] is not None:  # a list of services in recordings made before claims named capabilities
+        claims = about["claims"]
+        try:
+            options["claims"] = vocabulary.claims(suite.behaviour, {"services": claims} if isinstance(claims, list)
+                                                  else {"capabilities": claims})
+        except ValueError as exc:
+            raise ValueError(f"the recorded run's claims: {exc}") from None
     if not datagrams:
         raise ValueError("no datagram of the run is in the capture")
     t0 = datagrams[0].time

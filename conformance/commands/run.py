@@ -25,8 +25,10 @@ def add(sub) -> None:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     live = run.add_argument_group("scenarios and live targets")
     add_target(live, "run the scenarios against")
-    live.add_argument("--claims", metavar="FILE", help='JSON {"services": [...]}: the services the target implements; '
-                                                       "scenarios of other services are UNSUPPORTED")
+    live.add_argument("--claims", metavar="FILE",
+                      help='JSON {"services": [...], "capabilities": {NAME: "any"|"self"|"none"}}: what the target '
+                           "serves, and to whom (list --scenarios lists the capabilities); the cases of a capability it "
+                           "does not serve to the suite are UNSUPPORTED, not claimed")
     live.add_argument("--pcap", metavar="FILE", help="write every datagram of the run as pcapng, each commented "
                                                      "with its scenario and step (imc-conformance pcap replays it)")
     live.add_argument("--dry-run", action="store_true", help="print what the scenarios would send, and send nothing")

@@ -101,7 +101,8 @@ class DatagramSession:
             return
         conductor = self.conductor = Conductor(jobs, lambda job: job.request.params["program"],
                                                Addressing(self.peer.system, None, self.peer.node,
-                                                          getattr(self.peer, "other", None)), self.transport.epoch,
+                                                          getattr(self.peer, "other", None),
+                                                          getattr(self.peer, "stranger", None)), self.transport.epoch,
                                                first_unique=self.first_unique)
         self._transmit(conductor.start(self.transport.now()))
         while True:

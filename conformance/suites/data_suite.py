@@ -127,7 +127,7 @@ class DataSuite(Suite):
 
     @cached_property
     def behaviour(self) -> dict | None:
-        """The exchanges file (request/reply rules, and the parameters, effects and services of live cases) with
+        """The exchanges file (request/reply rules, and the parameters, effects, services and capabilities of live cases) with
         the ambiguity register (``ambiguities``: id -> entry, from ambiguities.json), or None for a suite without
         one."""
         doc = self.read_data("exchanges.json")
@@ -143,7 +143,7 @@ class DataSuite(Suite):
 
     def live_problem(self, kind: str, case: dict, params: dict | None = None) -> tuple[str, str] | None:
         """The first problem of a scenario (or robustness probe) the definitions and the exchanges file can see:
-        a message, field, value, parameter, effect, service, step or statement they lack; with ``params`` (a
+        a message, field, value, parameter, effect, capability, step or statement they lack; with ``params`` (a
         run's), also a parameter its messages cannot carry."""
         from ..kinds.robustness.phase import as_scenario
         from ..kinds.scenario.lint import lint_scenario

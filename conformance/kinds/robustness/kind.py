@@ -39,7 +39,8 @@ class RobustnessKind(LiveKind):
             return self._last[2]
         frames, skipped = self.frames(options.get("corpus", ()), edition, bool(options.get("replay_effects")))
         phase = Phase(frames, skipped, self.settings, self.wire, self.exchanges, edition,
-                      dict(options.get("params", {})), float(options.get("time_scale", 1.0)), bool(options.get("restart")))
+                      dict(options.get("params", {})), float(options.get("time_scale", 1.0)), bool(options.get("restart")),
+                      self.behaviour.get("bounds", {}))
         self._last = (options, edition, phase)  # holding the options keeps the identity test sound
         return phase
 

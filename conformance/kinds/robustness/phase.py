@@ -1,11 +1,16 @@
-"""The robustness phase, sans-IO: the target receives every frame of the corpus, then a burst of garbage, and must
-still answer every request kind it answered before.
+"""The robustness phase, sans-IO: the target receives every frame of the corpus, then the traffic UDP brings every
+day, then a burst of garbage, and must still answer every request kind it answered before.
 
 One machine runs the phase for every robustness case of the run (a batch): each case is a *probe*, a request
 kind and the reply that shows it is still served. The machine probes each once (baseline), sends the corpus
 frames in blocks (paced, readdressed to come from the session and go to the target, each case's defect kept),
-probes after each block, sends the garbage, probes again; a probe that goes unanswered names the block that
-silenced it, and when the session can restart the target the block is bisected down to the frame that does it.
+probes after each block, sends the hostile blocks (the probes' own requests addressed to anyone, to 0 or to another
+system, from the node's own id or from a system never announced, duplicated, reusing one id, many at once: the
+settings' ``hostile``) and probes after each, sends the garbage, probes again; a probe that goes unanswered names the
+block that silenced it, and when the session can restart the target a corpus block is bisected down to the frame
+that does it (a hostile block is named as it is: its kind is the finding). A probe's reply is known by the values it
+echoes, or by its addressee, the probe's own entity: the replies to the floods (another entity, other systems, other
+ids) are never taken for it.
 It is written as a generator that yields what it needs (send a frame, wait for a reply or a time, restart the
 target) so the sequence reads top to bottom; the driver below turns events into resumptions.
 """
@@ -13,9 +18,9 @@ target) so the sequence reads top to bottom; the driver below turns events into 
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
-from ..scenario.exchanges import exchange_for
+from ..scenario.exchanges import exchange_for, seconds
 from ..scenario.matchers import hashable, same
 from ..scenario.values import Scope, Unresolved, resolve_message
 from ..scenario.wire import Addressing, Composed, Parsed
@@ -31,6 +36,7 @@ class Frame:
     encoding: str
     expect: str
     data: bytes
+    addressed: bool = False  # sent as it is (a hostile block's), not readdressed to come from the session
 
 
 @dataclass
@@ -47,6 +53,7 @@ class Phase:
     params: dict
     time_scale: float = 1.0
     can_restart: bool = False
+    bounds: dict = field(default_factory=dict)  # the suite's timing bounds, which probes name
 
     def machine(self, addressing: Addressing, unique, members) -> "PhaseMachine":
         return PhaseMachine(self, list(members), addressing, unique)
@@ -108,6 +115,8 @@ class Probe:
     baseline: bool = False
     down: bool = False  # silenced, and not served again since (no restart)
     silencings: list = field(default_factory=list)  # after what it stopped answering, and what bisecting found
+    hostile: list = field(default_factory=list)  # the hostile blocks after which it stopped answering
+    hostile_run: int = 0  # how many hostile blocks it was asked after
     blind: str | None = None  # why an unanswered round could not be judged (the link could not show everything)
     garbage: str | None = None  # what the garbage did to it
     error: str | None = None  # why its request cannot be sent
@@ -246,6 +255,22 @@ class PhaseMachine:
             elif silenced:
                 for probe in silenced:
                     probe.silencings[-1] += "; give --restart-cmd to bisect to the frame"
+        for name, frames in self._hostile():
+            if not self._listening():
+                break
+            yield from self._replay(frames)
+            self._log("block", f"hostile block {name} sent: {len(frames)} frames")
+            asked = self._listening()
+            silenced = yield from self._round(asked, f"after the hostile block {name}")
+            for probe in asked:
+                probe.hostile_run += 1
+            for probe in silenced:
+                probe.down = True
+                probe.hostile.append(f"{name} ({len(frames)} frames)")
+            if silenced and self.phase.can_restart:
+                restarted = True
+                if not (yield from self._revive(silenced)):
+                    break
         if self._listening():
             rng = random.Random(settings["seed"])
             source = (self.addressing.system, FLOOD_ENTITY)
@@ -275,10 +300,59 @@ class PhaseMachine:
     def _listening(self) -> list[Probe]:
         return [p for p in self.probes if p.baseline and not p.down and not p.error]
 
+    def _hostile(self) -> list[tuple[str, list[Frame]]]:
+        """The hostile blocks of the settings, made of the listening probes' own requests (their effects are the
+        run's to allow), each as the block's kind says: addressed to anyone, to 0 or to the session's second system;
+        from the node's own id or from a system the session never announced; sent twice byte for byte; several
+        times with one id; many at once with fresh ids (idempotent requests only: a node may queue the others)."""
+        out = []
+        for kind in self.phase.settings.get("hostile", ()):
+            frames = []
+            for probe in self._listening():
+                spec = probe.program.case["probe"]
+                if "send" in spec and not (kind.get("idempotent_only") and not self._idempotent(spec)):
+                    frames += self._flood(kind, probe, spec)
+            if frames:
+                out.append((kind["id"], frames))
+        return out
+
+    def _flood(self, kind: dict, probe: Probe, spec: dict) -> list[Frame]:
+        """One probe's request as a hostile block of ``kind`` takes it."""
+        to = {"anyone": 0xFFFF, "zero": 0, "other": self.addressing.other}.get(kind.get("dst"))
+        src = {"node": self._node(), "stranger": self.addressing.stranger}.get(kind.get("src"), self.addressing.system)
+        speaker = replace(self.addressing, system=src, entity=FLOOD_ENTITY)
+        fixed: dict = {}
+        unique = (lambda name: fixed.setdefault(name, self.unique(name))) if kind.get("same_ids") else self.unique
+        out = []
+        for i in range(kind.get("copies", 1)):
+            scope = Scope(dict(self.phase.params), unique, self.epoch, addresses=self.addressing.symbols())
+            try:
+                message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
+                if to is not None:
+                    message["header"] = {"dst": to}
+                data = self.wire.compose(message, spec.get("encoding"), speaker, self.epoch + i * 0.001, "hostile",
+                                         self.phase.edition).data
+            except (Unresolved, ValueError):
+                return []  # the probe itself cannot be sent either: its own error says why
+            copies = 2 if kind.get("duplicate") else 1
+            out += [Frame(f"hostile/{kind['id']}/{probe.program.case_id}", spec.get("encoding", "le"), "valid", data,
+                          addressed=True)] * copies
+        return out
+
+    def _idempotent(self, spec: dict) -> bool:
+        """Whether a probe's request is safe to send many times (its exchange says so)."""
+        scope = Scope(dict(self.phase.params), lambda name: 0, self.epoch, addresses=self.addressing.symbols())
+        try:
+            message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
+        except Unresolved:
+            return False
+        exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
+        return bool(exchange and exchange.get("idempotent"))
+
     def _replay(self, frames: list[Frame]):
         pace, source = self._scaled(self.phase.settings["pace"]), (self.addressing.system, FLOOD_ENTITY)
         for frame in frames:
-            data = self.wire.readdress(frame.data, frame.encoding, source, self._node())
+            data = frame.data if frame.addressed else self.wire.readdress(frame.data, frame.encoding, source, self._node())
             yield _Send(Composed(data, {}, "", frame.encoding))
             yield _Wait(self.now + pace)
         yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
@@ -326,7 +400,7 @@ class PhaseMachine:
                 accepts, composed = self._ask(probe, spec)
                 if composed is not None:
                     yield _Send(composed)
-                asked[id(probe)] = (probe, accepts, self.now + self._scaled(spec["within"]))
+                asked[id(probe)] = (probe, accepts, self.now + self._scaled(seconds(spec["within"], self.phase.bounds)))
             if not asked:
                 break
             while asked:
@@ -343,7 +417,8 @@ class PhaseMachine:
         blind = "; ".join(dict.fromkeys(self.impairments[impaired:]))
         for key, probe in waiting.items():
             spec = probe.program.case["probe"]
-            self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within {spec['within']} s "
+            self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within "
+                               f"{seconds(spec['within'], self.phase.bounds):g} s "
                                f"({tries[key]} tries)" + (f"; not judged: {blind}" if blind else ""), probe)
             if blind:
                 probe.blind = probe.blind or f"{when}: {blind}"
@@ -355,7 +430,7 @@ class PhaseMachine:
             wanted = spec["alive"]
             return (lambda p: (wanted is None or p.message == wanted) and self.addressing.from_node(self.wire, p)), None
         scope = Scope(dict(self.phase.params), self.unique, self.epoch,
-                      addresses={"system": self.addressing.system, "node": self.addressing.node})
+                      addresses=self.addressing.symbols())
         try:
             message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
             composed = self.wire.compose(message, spec.get("encoding"), self.addressing, self.epoch, "probe",
@@ -404,6 +479,12 @@ class PhaseMachine:
                       f"{skipped}")
             findings.append({"check": "probe:corpus", "passed": not probe.silencings, "level": level, "clause": clause,
                              "detail": detail})
+            if probe.hostile_run:
+                findings.append({"check": "probe:hostile", "passed": not probe.hostile, "level": level, "clause": clause,
+                                 "detail": f"no {what} after the hostile block " + "; and after ".join(probe.hostile)
+                                 if probe.hostile else f"{what} still received after each of the {probe.hostile_run} "
+                                 "hostile blocks (requests addressed elsewhere, from the node's own id or an unannounced "
+                                 "system, duplicated, reusing one id, many at once)"})
             if not probe.down or probe.garbage:
                 findings.append({"check": "probe:garbage", "passed": probe.garbage is None, "level": level,
                                  "clause": clause, "detail": f"no {what} after {probe.garbage}" if probe.garbage

@@ -95,7 +95,7 @@ class Conductor:
                 self.pending.remove(j)
             busy |= program.resources()
             entity = self._entity_for(job)
-            addressing = Addressing(self.addressing.system, entity, self.addressing.node, self.addressing.other)
+            addressing = self.addressing.for_entity(entity)
             self.entities[entity] = job
             machine = program.machine(addressing, self.unique, [programs[j] for j in members])
             self.running[job], self.members[job] = machine, members

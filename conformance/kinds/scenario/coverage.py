@@ -1,5 +1,6 @@
 """The behavioural coverage table of a suite, generated from its data: every statement of statements.json, the
-live cases and steps that check it (their ``covers``), or why none can (``untestable``)."""
+live cases and steps that check it (their ``covers``), or why none can (``untestable``); where the statements say
+where in the seed they come from, the counts by that; the ambiguity register and the timing bounds."""
 
 from __future__ import annotations
 
@@ -30,9 +31,15 @@ def coverers(cases: list[dict], key: str = "covers") -> dict[str, list[str]]:
     return out
 
 
-def coverage_markdown(title: str, statements: list[dict], cases: list[dict], ambiguities: list[dict] = ()) -> str:
-    """The table: a summary per source (each seed, each reference file), every statement with the steps that check
-    or exercise it, and the ambiguity register (``ambiguities``: the readings the seeds leave open)."""
+FROM = {"description": "a sentence describing a message or clause", "enum": "an enumeration value's meaning",
+        "field": "a field's description", "practice": "the checked practice of a reference file"}
+
+
+def coverage_markdown(title: str, statements: list[dict], cases: list[dict], ambiguities: list[dict] = (),
+                      bounds: dict | None = None) -> str:
+    """The table: a summary per source (each seed, each reference file) and, where statements give it, per kind of
+    text they come from; every statement with the steps that check or exercise it; the ambiguity register
+    (``ambiguities``: the readings the seeds leave open) and the timing bounds (``bounds``: where each comes from)."""
     covered, exercised = coverers(cases), coverers(cases, "exercises")
 
     def status(s: dict) -> str:
@@ -40,10 +47,7 @@ def coverage_markdown(title: str, statements: list[dict], cases: list[dict], amb
             return "untestable"
         return "checked" if s["id"] in covered else "exercised" if s["id"] in exercised else "missing"
 
-    counts: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
-    for s in statements:
-        counts[s["clause"].split("#")[0]][status(s)] += 1
-        counts["all"][status(s)] += 1
+    counts = _counts(statements, lambda s: s["clause"].split("#")[0], status)
     total = counts["all"]
     scenarios = sum("steps" in c for c in cases)
     lines = [f"# {title}: behavioural coverage", "",
@@ -53,12 +57,11 @@ def coverage_markdown(title: str, statements: list[dict], cases: list[dict], amb
              f"{len(cases) - scenarios} robustness probes (a step fails when the statement is broken), "
              f"{total['exercised']} only exercised (partial: a step provokes it, but the target may also answer "
              f"otherwise and pass), {total['untestable']} not checkable over the wire (why below), "
-             f"{total['missing']} not covered.", "",
-             "| Source | Statements | Checked | Partial (exercised) | Not checkable | Not covered |", "|---|---|---|---|---|---|"]
-    for source in sorted(k for k in counts if k != "all") + ["all"]:
-        c = counts[source]
-        lines.append(f"| {source} | {sum(c.values())} | {c['checked']} | {c['exercised']} | {c['untestable']} | "
-                     f"{c['missing']} |")
+             f"{total['missing']} not covered.", ""]
+    lines += _summary("Source", counts, sorted(k for k in counts if k != "all") + ["all"])
+    if any("from" in s for s in statements):
+        kinds = _counts(statements, lambda s: FROM.get(s.get("from"), "-"), status)
+        lines += [""] + _summary("From", kinds, [k for k in (*FROM.values(), "-") if k in kinds])
     lines += ["", "| Statement | Level | Clause | Checked by (case → step) | Exercised by |", "|---|---|---|---|---|"]
     for s in statements:
         where = ("untestable: " + s["untestable"]) if "untestable" in s else (
@@ -74,7 +77,33 @@ def coverage_markdown(title: str, statements: list[dict], cases: list[dict], amb
             readings = "<br>".join(f"{i}. {_cell(r)}" for i, r in enumerate(a["readings"], 1))
             lines.append(f"| `{a['id']}` | `{a['clause']}`: {_cell(a['text'])} | {readings} | {_cell(a['dune'])} | "
                          f"{_cell(a['suite'])} | {a['level']} |")
+    if bounds:
+        lines += ["", "## Timing bounds", "",
+                  f"{len(bounds)} bounds the scenarios, probes and exchanges name (`exchanges.json`), each with where it "
+                  "comes from: the seeds give no times. Scaled by `--time-scale`.", "",
+                  "| Bound | Seconds | Where it comes from |", "|---|---|---|"]
+        for name, b in bounds.items():
+            clause = f" (`{b['clause']}`)" if "clause" in b else ""
+            lines.append(f"| `{name}` | {b['seconds']:g} | {_cell(b['source'])}{clause} |")
     return "\n".join(lines) + "\n"
+
+
+def _counts(statements: list[dict], key, status) -> dict[str, dict[str, int]]:
+    """key -> status -> how many statements (and "all")."""
+    counts: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
+    for s in statements:
+        counts[key(s)][status(s)] += 1
+        counts["all"][status(s)] += 1
+    return counts
+
+
+def _summary(label: str, counts: dict, keys: list[str]) -> list[str]:
+    lines = [f"| {label} | Statements | Checked | Partial (exercised) | Not checkable | Not covered |", "|---|---|---|---|---|---|"]
+    for key in keys:
+        c = counts[key]
+        lines.append(f"| {key} | {sum(c.values())} | {c['checked']} | {c['exercised']} | {c['untestable']} | "
+                     f"{c['missing']} |")
+    return lines
 
 
 def _cell(text: str) -> str:

@@ -13,7 +13,7 @@ def planned_sends(program: Program, addressing: Addressing, epoch: float) -> lis
     """(step id, the wire's description of what it sends, or why it cannot be built yet) for each send step."""
     counter = itertools.count(1000)
     scope = Scope(dict(program.params), lambda _name: next(counter), epoch,
-                  addresses={"system": addressing.system, "node": addressing.node})
+                  addresses=addressing.symbols())
     out = []
     for step in program.scenario["steps"]:
         if "setup" in step:

@@ -1,5 +1,6 @@
-"""Reading a suite's exchange rules (exchanges.json): which exchange a request opens, and the values a rule
-names, resolved through the suite's wire."""
+"""Reading a suite's exchange rules (exchanges.json): which exchange a request opens, the values a rule names,
+resolved through the suite's wire, when the seeds let a request go unanswered, and the timing bounds rules and
+steps name."""
 
 from __future__ import annotations
 
@@ -24,13 +25,29 @@ def selected(wire, message: str, fields: dict, when: dict, edition: str) -> bool
     return all(fields.get(f) in resolved(wire, message, f, names, edition) for f, names in when.items())
 
 
-def silence_allowed(wire, exchange: dict, request: dict, edition: str) -> str | None:
-    """The ambiguity under which the seeds define no reply to this request (the exchange's ``silence``), or None."""
+def silence_allowed(wire, exchange: dict, request: dict, edition: str, facts: dict | None = None,
+                    everywhere=()) -> str | None:
+    """The ambiguity under which the seeds define no reply to this request (a rule of the exchange's ``silence``,
+    or of ``everywhere``: the rules for every exchange), or None. A rule selects requests by their fields (``when``,
+    ``null``) and by ``facts`` about them: the fields naming a system nobody answers for (``nobody``), the fields
+    whose value an earlier request of the exchange still carries (``reuses``), and where the request was addressed
+    (``to``: "elsewhere", neither the node nor anyone)."""
+    facts = facts or {}
     message = exchange["request"]["message"]
-    for rule in exchange.get("silence", ()):
-        if selected(wire, message, request, rule["when"], edition) and ("null" not in rule or request.get(rule["null"]) is None):
+    for rule in (*exchange.get("silence", ()), *everywhere):
+        if (selected(wire, message, request, rule.get("when", {}), edition)
+                and ("null" not in rule or request.get(rule["null"]) is None)
+                and ("nobody" not in rule or rule["nobody"] in facts.get("nobody", ()))
+                and ("reuses" not in rule or rule["reuses"] in facts.get("reuses", ()))
+                and ("to" not in rule or rule["to"] == facts.get("to"))):
             return rule["ambiguity"]
     return None
+
+
+def seconds(value, bounds: dict) -> float:
+    """A timing bound in seconds: a number, or the name of one of the suite's ``bounds`` (exchanges.json), each
+    saying where it comes from."""
+    return float(bounds[value]["seconds"] if isinstance(value, str) else value)
 
 
 def exchange_for(exchanges, wire, message: dict, edition: str) -> dict | None:
@@ -48,9 +65,10 @@ class States:
     """The states of an exchange's replies for one request, as the wire carries them: ``progress`` (under way),
     ``terminal`` (ending it: exactly one, nothing after), ``open`` (value -> ambiguity id: the seeds leave open
     whether the state ends the request or delays it, so a sequence may end on it or go on), ``unknown`` (the
-    ambiguity id reading any other value as an open state rather than a failure, or None); ``level`` and
-    ``clause``: what the rules of one terminal, nothing after it and known states rest on; ``open_wait``: how long
-    a sequence listens after an open state before taking it as the end."""
+    ambiguity id reading any other value as an open state rather than a failure, or None); ``declined``: the
+    terminal states that decline the request where the seeds let a node (the operation is not supported), with the
+    ``declined_clause`` they rest on; ``level`` and ``clause``: what the rules of one terminal, nothing after it and
+    known states rest on."""
 
     field: str
     progress: frozenset
@@ -59,7 +77,8 @@ class States:
     unknown: str | None
     level: str
     clause: str
-    open_wait: float = 0.0  # seconds a sequence keeps listening after an open state, for the request to go on
+    declined: frozenset = frozenset()
+    declined_clause: str | None = None
 
     def kind(self, value) -> str:
         """``progress``, ``terminal``, ``open`` or ``unknown`` for a reply's state value."""
@@ -94,8 +113,10 @@ def states_for(wire, exchange: dict, request: dict, edition: str) -> States | No
     for name, ambiguity in chosen.get("open", {}).items():
         for v in values([name]):
             opened[v] = ambiguity
+    declined = chosen.get("declined", {})
     return States(state["field"], values(chosen["progress"]) - opened.keys(), values(chosen["terminal"]) - opened.keys(),
-                  opened, chosen.get("unknown"), chosen.get("level", "MUST"), chosen["clause"], chosen.get("open_wait", 0.0))
+                  opened, chosen.get("unknown"), chosen.get("level", "MUST"), chosen["clause"],
+                  values(declined.get("states", ())), declined.get("clause"))
 
 
 def weaker(a: str, b: str) -> str:

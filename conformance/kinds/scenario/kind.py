@@ -2,9 +2,10 @@
 
 ``admit`` declines scenarios whose effects the run does not allow; ``plan`` turns a scenario into one request the session runs (a ``Program``), or into a verdict
 reached without the target: INCONCLUSIVE when a parameter it needs is not given or the profile says it
-does not apply, UNSUPPORTED when the target does not claim its service. ``judge`` turns what the machine
-found into checks: a failed MUST is FAIL, a failed SHOULD is NON_STRICT (failing under --strict), an open reading of
-the seeds (INFO) IMPL_DEFINED.
+does not apply, UNSUPPORTED when the target does not claim its capability for the suite (not claimed, or served only
+to its own system). ``judge`` turns what the machine found into checks: a failed MUST is FAIL, a failed SHOULD is
+NON_STRICT (failing under --strict), an open reading of the seeds (INFO) IMPL_DEFINED, a request the node declined
+where the seeds let it (DECLINED) UNSUPPORTED.
 """
 
 from __future__ import annotations
@@ -63,7 +64,8 @@ class ScenarioKind(LiveKind):
 
     def program(self, case: dict, edition: str, options: dict) -> Program:
         return Program(case["id"], case, self.exchanges, self.wire, edition, dict(options.get("params", {})),
-                       float(options.get("time_scale", 1.0)), self.behaviour.get("ambiguities", {}))
+                       float(options.get("time_scale", 1.0)), self.behaviour.get("ambiguities", {}),
+                       self.behaviour.get("bounds", {}), tuple(self.behaviour.get("silence", ())))
 
     def reply_group(self, case: dict) -> str:
         """The message a scenario waits for first (where a malformed frame that names none is filed)."""
@@ -86,16 +88,19 @@ def effects_barred(case: dict, options: dict) -> str | None:
 def gate(case: dict, options: dict, behaviour: dict) -> Request | None:
     """A request judged without the target when a live case cannot run as asked: INCONCLUSIVE when a parameter
     it needs is not given or the profile says it does not apply, UNSUPPORTED when the target does not claim its
-    service; else None."""
+    capability for the suite (it does not serve it, or serves it only to its own system); else None."""
     params = options.get("params", {})
     missing = [p for p in case.get("needs", ()) if p not in params]
     if missing:
         why = "; ".join(f"--param {p}=... ({behaviour['params'][p]['description']})" for p in missing)
         return skip("INCONCLUSIVE", f"not run: needs {why}")
     claims = options.get("claims")
-    service = case.get("service")
-    if claims is not None and service is not None and service not in claims:
-        return skip("UNSUPPORTED", f"not run: the target does not claim the service {service!r}")
+    capability = case.get("capability")
+    if claims is not None and capability is not None and claims.get(capability) != "any":
+        what = behaviour["capabilities"][capability]["description"]
+        why = ("the target serves it only to its own system, and the suite speaks as another"
+               if claims.get(capability) == "self" else "the target does not claim it")
+        return skip("UNSUPPORTED", f"not claimed: {capability} ({what}): {why}")
     for rule in (options.get("profile") or {}).get("rules", ()):
         if "not_applicable" in rule and any(fnmatch.fnmatchcase(case["id"], g) for g in rule["scenarios"]):
             return skip("INCONCLUSIVE", f"not applicable under the profile: {rule['not_applicable']} ({rule['citation']})")
@@ -123,6 +128,9 @@ def judgement(case: dict, request: Request, answer: Answer, reply_group: str) ->
         level = "SHOULD" if f["check"] in relaxed and relaxable(f["check"]) and f["level"] == "MUST" else f["level"]
         if level == "INFO":  # an open reading of the seeds: what the node chose, never a failure
             checks.append(CheckResult(f["check"], Verdict.IMPL_DEFINED, f["detail"], clause=f["clause"]))
+            continue
+        if level == "DECLINED":  # the node said it does not do this, where the seeds let it: declining, not failing
+            checks.append(CheckResult(f["check"], Verdict.UNSUPPORTED, f["detail"], clause=f["clause"]))
             continue
         verdict = Verdict.PASS if f["passed"] else (Verdict.FAIL if level == "MUST" else Verdict.NON_STRICT)
         detail = f["detail"] if f["passed"] else f"{level}: {f['detail']}"

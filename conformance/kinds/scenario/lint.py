@@ -33,12 +33,21 @@ def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
         problem = _normative_problem(step, statements)
         if problem:
             return f".steps[{i}]", problem
+        for key, value in _bounds_of(step):
+            problem = _bound_problem(value, behaviour.get("bounds"))
+            if problem:
+                return f".steps[{i}].{key}", problem
+        for j, more in enumerate(step.get("also", ())):
+            if more.get("ambiguity") is not None and more["ambiguity"] not in register:
+                return f".steps[{i}].also[{j}].ambiguity", f"{more['ambiguity']!r} is not an entry of ambiguities.json"
+            if step.get("level", "MUST") == "SHOULD" and more["level"] == "SHOULD":
+                return f".steps[{i}].also[{j}].level", "also checks are weaker than their step: this step is a SHOULD already"
     for key, vocabulary in (("needs", "params"), ("effects", "effects")):
         for i, name in enumerate(case.get(key, ())):
             if name not in behaviour[vocabulary]:
                 return f".{key}[{i}]", f"{name!r} is not one of the {vocabulary} of exchanges.json"
-    if "service" in case and case["service"] not in behaviour["services"]:
-        return ".service", f"{case['service']!r} is not one of the services of exchanges.json"
+    if case.get("capability") not in behaviour["capabilities"]:
+        return ".capability", f"{case.get('capability')!r} is not one of the capabilities of exchanges.json"
     expect = case["expect"]
     applies = [e for e in editions if isinstance(expect, str) or e in expect]
     unknown = set(expect) - set(editions) if isinstance(expect, dict) else set()
@@ -55,7 +64,7 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
     examples = {name: int(p["example"], 0) if p["type"] == "integer" else p["example"]
                 for name, p in behaviour["params"].items()}
     examples.update(params or {})
-    scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2, "other": 3})
+    scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2, "other": 3, "stranger": 4})
     program = Program(case["id"], case, tuple(behaviour["exchanges"]), wire, edition, examples)
     seen, sends = set(), {}
     for i, step in enumerate(case["steps"]):
@@ -149,6 +158,26 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
         if message is not None and kind in ("expect", "sequence"):
             scope.replies[step["id"]] = wire.example(message, edition)  # what a later step's $reply reads
     return None
+
+
+def _bounds_of(step: dict):
+    """(key, value) of every timing bound a step gives."""
+    for key in ("within", "for", "wait", "quiet"):
+        if key in step:
+            yield key, step[key]
+    if "tolerance" in step.get("not_after", {}):
+        yield "not_after.tolerance", step["not_after"]["tolerance"]
+
+
+def _bound_problem(value, bounds: dict | None) -> str | None:
+    """Why a timing bound cannot stand: where the suite has a register of bounds, each names one of them (and so
+    where it comes from); where it has none, it is seconds."""
+    if bounds is None:
+        return None if not isinstance(value, str) else f"{value!r}: this suite has no register of bounds; give seconds"
+    if isinstance(value, str) and value in bounds:
+        return None
+    return (f"{value!r} is not one of the bounds of exchanges.json: a timing bound names its source "
+            f"({', '.join(bounds)})")
 
 
 def _release_problem(case: dict, index: int, ref: str, exchange: dict) -> str | None:

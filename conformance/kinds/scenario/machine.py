@@ -9,10 +9,15 @@ nothing more for a quiet period; ``silence``: no such message for a while; ``ali
 sends something; ``wait``.
 
 Levels come from the seeds' words: a step is MUST or SHOULD, and the rules of a sequence's states carry the level
-of the text they rest on (exchanges.json). Where the seeds leave the reading open (the ambiguity register), the
-node's choice is an INFO check naming the register's entry, never a failure: a state that may end a request or
-delay it (BUSY), a state value the definitions do not name, silence where the seeds define no reply (the exchange's
-``silence``, or ``if_silent`` on a step that awaits something other than a reply).
+of the text they rest on (exchanges.json); an ``expect`` step may check more of the same reply at a weaker level
+(``also``: a SHOULD, or a reading). Where the seeds leave the reading open (the ambiguity register), the node's
+choice is an INFO check naming the register's entry, never a failure: a state that may end a request or delay it
+(BUSY: the sequence then listens until its own bound), a state value the definitions do not name, silence where the
+seeds define no reply (the exchange's ``silence`` or the rules for every request, selecting a request by its fields,
+a system nobody answers for, an id an earlier request still carries or an address elsewhere; or ``if_silent`` on a
+step that awaits something other than a reply). A sequence ending in a state that declines the request where the
+seeds let a node (the operation is not supported) is a DECLINED check: the node is shown declining, not failing.
+Bounds are seconds or the names of the suite's timing bounds, each saying where it comes from.
 
 A step that fails for want of a frame (no reply, no terminal state) while the session could not see everything
 (the link reported an impairment: the kernel dropped datagrams) or while a frame of the awaited message could
@@ -25,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-from .exchanges import States, exchange_for, resolved, silence_allowed, states_for, weaker
+from .exchanges import States, exchange_for, resolved, seconds, silence_allowed, states_for, weaker
 from .matchers import hashable, mismatch, same, show
 from .values import Scope, Unresolved, resolve_matcher, resolve_message, resolve_plain
 from .wire import Addressing, Composed, Parsed, Wire
@@ -46,6 +51,8 @@ class Program:
     params: dict
     time_scale: float = 1.0
     ambiguities: dict = field(default_factory=dict)  # id -> entry of the suite's ambiguity register
+    bounds: dict = field(default_factory=dict)  # name -> the suite's timing bound (seconds, and where it comes from)
+    silence: tuple = ()  # the rules under which any request may go unanswered (exchanges.json ``silence``)
 
     def machine(self, addressing: Addressing, unique, members) -> "Machine":
         """The state machine that runs it, for a session speaking from ``addressing``; ``unique(name)`` gives
@@ -103,7 +110,6 @@ class _Step:
     unjudged: int = 0  # frames of the awaited message the suite could not judge
     terminal: Parsed | None = None
     failures: dict = field(default_factory=dict)  # check -> first detail
-    seen: list = field(default_factory=list)  # data already received, to tell duplicates
     unmatched: str = ""  # the first reply whose echoed value was not the request's (it is not this step's)
     unmatched_count: int = 0
     misechoed: tuple | None = None  # (echo rule, what it echoed) of a reply to this scenario's entity echoing wrongly
@@ -111,13 +117,13 @@ class _Step:
     open_end: str | None = None  # the ambiguity id when the sequence's last state is one the seeds leave open
     readings: dict = field(default_factory=dict)  # ambiguity id -> what the node did that the seeds leave open
     states: tuple = ()  # (the States of its replies, or None), once worked out
+    seen: set = field(default_factory=set)  # what it took, to tell the link's byte-identical copies
 
 
 class Machine:
     def __init__(self, program: Program, addressing: Addressing, unique):
         self.program, self.addressing = program, addressing
-        self.scope = Scope(dict(program.params), unique,
-                           addresses={"system": addressing.system, "node": addressing.node, "other": addressing.other})
+        self.scope = Scope(dict(program.params), unique, addresses=addressing.symbols())
         self.wire, self.edition = program.wire, program.edition
         self.findings: list[Finding] = []
         self.timeline: list[dict] = []
@@ -125,6 +131,9 @@ class Machine:
         self.sent: dict[str, Composed] = {}
         self.sent_at: dict[str, float] = {}  # send step -> when it was sent
         self.sent_from: dict[str, tuple] = {}  # send step -> (system, entity) it spoke as
+        self.sends: dict[str, int] = {}  # send step -> how many times its request was sent (resends included)
+        self.answers: dict[str, int] = {}  # send step -> how many replies to its request the steps took
+        self.seen: set = set()  # what every step took: a byte-identical copy during a silence is the link's
         self.keys: list[tuple] = []  # (reply message, ((field, value), ...)) its requests gave replies to echo
         self.keys_seen = 0  # how many of keys the conductor has registered
         self.backlog: list[Parsed] = []  # replies to a request a later step awaits
@@ -189,10 +198,14 @@ class Machine:
             if self._answers_malformed(step, parsed):
                 return self._answered_malformed(t, epoch, step, parsed)
             return []
-        if any(parsed.data == d for d in step.seen):
+        key = hashable(parsed.data)
+        if key in (self.seen if step.kind == "silence" else step.seen):  # a silence follows what earlier steps took
             self._log(t, "duplicate", parsed, "a byte-identical copy of an earlier datagram (tolerated)")
             return []
-        step.seen.append(parsed.data)
+        step.seen.add(key)
+        self.seen.add(key)
+        if "reply_to" in step.spec:
+            self.answers[step.spec["reply_to"]] = self.answers.get(step.spec["reply_to"], 0) + 1
         getattr(self, "_on_" + step.kind)(t, step, parsed)
         return self._advance(t, epoch) if self._finished(t, step) else []
 
@@ -219,6 +232,7 @@ class Machine:
             step.tries += 1
             step.until = t + self._bound(step.spec["within"])
             request = self.sent[step.spec["reply_to"]]
+            self.sends[step.spec["reply_to"]] += 1
             self.timeline.append({"t": self._rel(t), "event": "resent", "step": step.spec["id"],
                                   **self.wire.present(request), "note": f"try {step.tries}: no answer within the bound"})
             return [request]
@@ -244,7 +258,7 @@ class Machine:
             self.step = _Step(spec, kind)
             if kind in ("send", "setup"):
                 try:
-                    out.append(self._send(t, epoch, spec) if kind == "send" else self._setup(t, spec))
+                    out += [self._send(t, epoch, spec)] * spec.get("copies", 1) if kind == "send" else [self._setup(t, spec)]
                 except (Unresolved, ValueError) as exc:  # a value the run gave that the message cannot carry
                     self.error = f"step {spec['id']} cannot be sent: {exc}"
                     self._stop(t, self.error)
@@ -262,8 +276,9 @@ class Machine:
         return out
 
     def _answered_step(self, parsed: Parsed) -> str | None:
-        """The send step whose request this reply echoes (by the exchange's echo fields), if any; for a reply
-        addressed to the session's second system, the latest request sent as it that such a reply answers."""
+        """The send step whose request this reply echoes (by the exchange's echo fields), if any; else, for a reply
+        addressed to the session's second system, or to a requester of an exchange without echo fields, the
+        latest request sent from that address that such a reply answers."""
         if parsed.decoded is None:
             return None
         to = self.wire.destination(parsed)
@@ -276,7 +291,7 @@ class Machine:
             if echoes and all(same(parsed.fields.get(r["reply_field"]), composed.decoded["fields"].get(r["request_field"]))
                               for r in echoes):
                 return step_id
-            if to is not None and to[0] == self.addressing.other and tuple(to) == self.sent_from[step_id]:
+            if to is not None and tuple(to) == self.sent_from[step_id] and (to[0] == self.addressing.other or not echoes):
                 by_address = step_id
         return by_address
 
@@ -320,6 +335,7 @@ class Machine:
         self.sent[spec["id"]] = composed
         self.sent_at[spec["id"]] = t
         self.sent_from[spec["id"]] = (speaker.system, speaker.entity)
+        self.sends[spec["id"]] = spec.get("copies", 1)
         self.scope.sent[spec["id"]] = composed.decoded.get("fields", {})
         exchange = self.program.exchange_for(message)
         sent = composed.decoded.get("fields", {})
@@ -421,9 +437,11 @@ class Machine:
 
     def _exchange(self, step: _Step) -> dict | None:
         ref = step.spec.get("reply_to")
-        if ref is None:
-            return None
-        sent = self.sent[ref]
+        return None if ref is None else self._exchange_of(ref)
+
+    def _exchange_of(self, send_step: str) -> dict | None:
+        """The exchange the request of a send step opened, if any."""
+        sent = self.sent[send_step]
         return self.program.exchange_for({"abbrev": sent.message, "fields": sent.decoded.get("fields", {})})
 
     def _correlate(self, step: _Step, parsed: Parsed) -> list[tuple[str, str, str, str | None]]:
@@ -474,6 +492,13 @@ class Machine:
         if spec.get("fields"):
             bad = self._match_fields(spec["expect"], spec["fields"], parsed)
             self._find(step, "fields", bad is None, bad or "fields as expected")
+        for more in spec.get("also", ()):  # checks of the same reply at a weaker level: a SHOULD, or a reading
+            bad = self._match_fields(spec["expect"], more["fields"], parsed)
+            if more["level"] == "INFO":
+                self._read(step, more["ambiguity"], f"{more['statement']}: " + (f"no ({bad})" if bad else "yes"))
+            else:
+                self._find(step, more["id"], bad is None, bad or more["statement"], more["level"], more["clause"])
+        self._readings(step)
 
     def _on_sequence(self, t: float, step: _Step, parsed: Parsed) -> None:
         spec = step.spec
@@ -508,8 +533,9 @@ class Machine:
             opened = states.open.get(hashable(value))
         if kind in ("terminal", "open"):
             step.terminal, step.open_end = parsed, opened
-            quiet = spec.get("quiet", 1.0) if kind == "terminal" else max(spec.get("quiet", 1.0), states.open_wait)
-            step.until = t + self._bound(quiet)  # after an open state the request may still go on: listen longer
+            step.until = t + self._bound(spec.get("quiet", 1.0))
+            if kind == "open":  # the request may still go on: listen until the step's own bound, the time it is given
+                step.until = max(step.bound, step.until)
             self.released = self.released or (spec.get("release", False) and self._last_wait(step))
             self._log(t, "received", parsed, f"{name}: terminal state" if kind == "terminal" else
                       f"{name}: a state that may end the request or delay it (open reading {opened})")
@@ -527,7 +553,7 @@ class Machine:
         names = resolved(self.wire, step.spec["sequence"], states.field, rule["states"], self.edition)
         if not any(same(value, v) for v in names):
             return None
-        limit = float(resolve_plain(rule["seconds"], self.scope)) + rule.get("tolerance", 1.0)
+        limit = float(resolve_plain(rule["seconds"], self.scope)) + self._seconds(rule.get("tolerance", 1.0))
         after = t - self.sent_at[step.spec["reply_to"]]
         return None if after <= limit else f"{name} {after:.3f} s after the request, later than {limit:g} s"
 
@@ -536,6 +562,10 @@ class Machine:
         step.readings.setdefault(ambiguity, what)
 
     def _on_silence(self, t: float, step: _Step, parsed: Parsed) -> None:
+        ref = step.spec.get("reply_to")
+        if ref is not None and self.answers[ref] <= self.sends[ref]:  # the request went more than once
+            self._log(t, "received", parsed, f"an answer to one of the {self.sends[ref]} times the request was sent")
+            return
         step.replies.append(parsed)
         self._log(t, "received", parsed, "breaks the expected silence")
 
@@ -580,7 +610,7 @@ class Machine:
     def _expire(self, t: float, step: _Step) -> None:
         """The step's time is up: judge what it gathered."""
         spec, kind = step.spec, step.kind
-        bound = _length(spec)
+        bound = f"{self._seconds(_length(spec)):g}"
         if kind == "wait":
             pass
         elif kind == "silence":
@@ -631,6 +661,9 @@ class Machine:
             bad = self._match_fields(spec["sequence"], self._terminal_matchers(step, states), step.terminal)
             self._find(step, "terminal", bad is None, bad or f"ended in {self._terminal_name(step)} ({trail})",
                        level, states.clause)
+            if hashable(step.terminal.fields.get(states.field)) in states.declined and states.field not in spec.get("terminal", {}):
+                self._find(step, "declined", True, f"the node declined the request: {self._terminal_name(step)}",
+                           "DECLINED", states.declined_clause)
         for check in ("states", "after-terminal"):
             key = (check, states.level, states.clause)
             if key in step.failures or check == "after-terminal" and step.terminal is not None:
@@ -653,19 +686,38 @@ class Machine:
         return matchers
 
     def _silence_allowed(self, step: _Step, what: str) -> bool:
-        """Where the register reads silence as allowed (the exchange's ``silence`` for the request, or the step's
-        ``if_silent`` where it awaits no reply), the lack of a reply is noted as that reading, not failed (unless
-        the session could not see everything: then it is not judged)."""
+        """Where the register reads silence as allowed (the exchange's ``silence`` for the request, or the rules for
+        every request, or the step's ``if_silent`` where it awaits no reply), the lack of a reply is noted as that
+        reading, not failed (unless the session could not see everything: then it is not judged)."""
         ambiguity = step.spec.get("if_silent")
         exchange = self._exchange(step)
         if exchange is not None:
-            request = self.sent[step.spec["reply_to"]].decoded.get("fields", {})
-            ambiguity = silence_allowed(self.wire, exchange, request, self.edition)
+            ref = step.spec["reply_to"]
+            request = self.sent[ref].decoded.get("fields", {})
+            ambiguity = silence_allowed(self.wire, exchange, request, self.edition, self._facts(ref, exchange),
+                                        self.program.silence)
         if ambiguity is None or self._blind(step) is not None or self.suspect:
             return False
         self._read(step, ambiguity, what)
         self._readings(step)
         return True
+
+    def _facts(self, ref: str, exchange: dict) -> dict:
+        """What the silence rules may select a request by, beyond its fields: the fields naming a system nobody
+        answers for (``$nobody``), the echoed fields whose value an earlier request of the exchange carried, and
+        where it was addressed ("elsewhere": neither to the node nor to anyone)."""
+        spec = self._spec(ref)["send"]["fields"]
+        nobody = {name for name, value in spec.items() if isinstance(value, dict) and "$nobody" in value}
+        sent = self.sent[ref].decoded.get("fields", {})
+        order = [s["id"] for s in self.program.scenario["steps"]]
+        earlier = [self.sent[s].decoded.get("fields", {}) for s in self.sent
+                   if order.index(s) < order.index(ref) and self._exchange_of(s) is exchange]
+        reuses = {r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"
+                  and any(same(e.get(r["request_field"]), sent.get(r["request_field"])) for e in earlier)}
+        composed = self.sent[ref]
+        to = self.wire.destination(Parsed(composed.data, composed.message, composed.decoded))
+        elsewhere = to is not None and to[0] not in (self.addressing.node, self.wire.anyone)
+        return {"nobody": nobody, "reuses": reuses, "to": "elsewhere" if elsewhere else None}
 
     def _readings(self, step: _Step) -> None:
         """One INFO check per open reading the step met: never a failure, always in the report."""
@@ -695,8 +747,13 @@ class Machine:
             why.append(f"{step.unjudged} frame(s) of it could not be judged")
         return "; ".join(why) or None
 
-    def _bound(self, seconds) -> float:
-        return float(seconds) * self.program.time_scale
+    def _seconds(self, value) -> float:
+        """A bound as data gives it (seconds, or the name of one of the suite's bounds), in seconds."""
+        return seconds(value, self.program.bounds)
+
+    def _bound(self, value) -> float:
+        """A bound in seconds of the run (scaled by --time-scale)."""
+        return self._seconds(value) * self.program.time_scale
 
     def _max_tries(self, step: _Step) -> int:
         exchange = self._exchange(step)

@@ -1,5 +1,6 @@
 """A run's settings for live cases (scenarios, robustness), checked against the suite's vocabulary (its
-exchanges file: parameters, effects, services): one-line ValueErrors for anything unknown or malformed."""
+exchanges file: parameters, effects, services and capabilities): one-line ValueErrors for anything unknown or
+malformed."""
 
 from __future__ import annotations
 
@@ -33,12 +34,28 @@ def effects(behaviour: dict, text: str | None) -> set[str]:
     return names
 
 
-def claims(behaviour: dict, doc) -> set[str]:
-    """The services a claims document (``{"services": [...]}``) says the target implements."""
-    if (not isinstance(doc, dict) or not isinstance(doc.get("services"), list) or set(doc) - {"services", "description"}
-            or not all(isinstance(s, str) for s in doc["services"])):
-        raise ValueError('expected {"services": [NAME, ...]} (optionally with "description")')
-    unknown = [s for s in doc["services"] if s not in behaviour["services"]]
+SCOPES = ("any", "self", "none")  # a capability served to every system, only to the node's own, or not at all
+
+
+def claims(behaviour: dict, doc) -> dict[str, str]:
+    """What a claims document says the target serves, as capability -> "any" or "self" (whom it serves): its
+    ``services`` claim each of their capabilities for any system, its ``capabilities`` (name -> "any", "self" or
+    "none") claim one each, overriding its service's."""
+    if (not isinstance(doc, dict) or set(doc) - {"services", "capabilities", "description"}
+            or not {"services", "capabilities"} & set(doc)
+            or not isinstance(doc.get("services", []), list) or not all(isinstance(s, str) for s in doc.get("services", []))
+            or not isinstance(doc.get("capabilities", {}), dict)):
+        raise ValueError('expected {"services": [NAME, ...], "capabilities": {NAME: "any"|"self"|"none", ...}} '
+                         '(either or both; optionally with "description")')
+    known = behaviour["capabilities"]
+    unknown = [s for s in doc.get("services", []) if s not in behaviour["services"]]
     if unknown:
         raise ValueError(f"unknown service {str(unknown[0])[:40]!r} (services: {', '.join(behaviour['services'])})")
-    return set(doc["services"])
+    out = {name: "any" for name, c in known.items() if c["service"] in doc.get("services", [])}
+    for name, scope in doc.get("capabilities", {}).items():
+        if name not in known:
+            raise ValueError(f"unknown capability {str(name)[:40]!r} (capabilities: {', '.join(known)})")
+        if scope not in SCOPES:
+            raise ValueError(f"capability {name!r}: {str(scope)[:20]!r} is not one of {', '.join(SCOPES)}")
+        out[name] = scope
+    return {name: scope for name, scope in out.items() if scope != "none"}

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from ...capture.findings import Finding, Watched
 from ...core.verdicts import Verdict
-from .exchanges import States, resolved, silence_allowed, states_for, weaker
+from .exchanges import States, resolved, seconds, silence_allowed, states_for, weaker
 from .matchers import hashable, same, show
 from .wire import Parsed
 
@@ -51,10 +51,14 @@ class _Open:
 
 
 class PassiveExchanges:
-    """A tracker of one capture's exchanges. ``anyone``: the system id meaning "no system in particular"."""
+    """A tracker of one capture's exchanges. ``anyone``: the system id meaning "no system in particular";
+    ``nobody``: a destination no system answers for (a request to it is addressed elsewhere); ``bounds``: the suite's
+    timing bounds, which exchanges name; ``silence``: the rules under which any request may go unanswered."""
 
-    def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None):
-        self.wire, self.anyone, self.edition = wire, anyone, edition
+    def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None,
+                 bounds: dict | None = None, nobody: int | None = None, silence=()):
+        self.wire, self.anyone, self.edition, self.bounds = wire, anyone, edition, bounds or {}
+        self.nobody, self.silence = nobody, tuple(silence)
         self.state_cache: dict[tuple, States] = {}
         self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
         self.by_request: dict[str, list[_Rule]] = {}
@@ -197,7 +201,7 @@ class PassiveExchanges:
         anyone, sender = self.anyone, w.src
         for o in mine:  # oldest first
             node = o.request.dst
-            if (sender == o.request.src) if node is None or node == anyone else (sender != node):
+            if (sender == o.request.src) if node in (None, anyone, self.nobody) else (sender != node):
                 continue  # not from the system the request was for (see _from_node)
             if o.request.src == w.dst:
                 if not o.answered:
@@ -211,7 +215,7 @@ class PassiveExchanges:
     def _from_node(self, o: _Open, w: Watched) -> bool:
         """Whether ``w`` comes from the system the request was for (any other than the requester, for a request
         to no system in particular)."""
-        if o.request.dst in (None, self.anyone):
+        if o.request.dst in (None, self.anyone, self.nobody):
             return w.src != o.request.src
         return w.src == o.request.dst
 
@@ -252,7 +256,8 @@ class PassiveExchanges:
                 return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
                                       f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
-            silent = silence_allowed(self.wire, ex, o.request.fields, self.edition)
+            facts = {"to": "elsewhere" if o.request.dst == self.nobody else None}
+            silent = silence_allowed(self.wire, ex, o.request.fields, self.edition, facts, self.silence)
             if silent is not None:  # the seeds define no reply to this request: an open reading, never a failure
                 return [self._finding(o, f"reading/{silent}", Verdict.IMPL_DEFINED, ex["clause"],
                                       f"no {ex['reply']} {self._between(o)} within {bound:g} s (open reading {silent})",
@@ -298,7 +303,8 @@ class PassiveExchanges:
 
         return _Rule(ex, values(ex["request"]["message"], ex["request"].get("when", {})),
                      values(ex["reply"], ex.get("reply_when", {})),
-                     [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex, ex["within"] * scale)
+                     [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex,
+                     seconds(ex["within"], self.bounds) * scale)
 
 
 def _matches(fields: dict, when: dict[str, frozenset]) -> bool:

@@ -1,5 +1,6 @@
 """Resolving the values a scenario writes symbolically: parameters, per-run unique numbers, times, what an
-earlier step sent, and names (enumeration values) through the suite's wire."""
+earlier step sent, addresses, names of systems nobody answers for, and names (enumeration values) through the
+suite's wire."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from dataclasses import dataclass, field
 
 from .matchers import KEYS, is_matcher
 
-SYMBOLS = ("$param", "$unique", "$epoch", "$sent", "$reply", "$address")
+SYMBOLS = ("$param", "$unique", "$epoch", "$sent", "$reply", "$address", "$nobody")
 
 
 class Unresolved(Exception):
@@ -29,7 +30,7 @@ class Scope:
     epoch: float = 0.0
     sent: dict = field(default_factory=dict)
     replies: dict = field(default_factory=dict)
-    addresses: dict = field(default_factory=dict)  # "system" (the session's), "node"
+    addresses: dict = field(default_factory=dict)  # "system" (the session's), "node", "other", "stranger"
 
     def symbol(self, spec: dict):
         (key, arg), = spec.items()
@@ -41,6 +42,8 @@ class Scope:
             return self.unique(arg)
         if key == "$epoch":
             return self.epoch + arg
+        if key == "$nobody":  # a name no system answers to: the exchange's silence rules may read it so
+            return arg
         if key == "$address":
             if self.addresses.get(arg) is None:
                 raise Unresolved(f"the {arg}'s address is not known")
@@ -115,4 +118,6 @@ def resolve_matcher(spec, message: str, path: str, scope: Scope, wire, edition: 
         return {**spec, key: resolve_value(arg, message, path, scope, wire, edition)}
     if key in ("all_of", "any_of"):
         return {key: [resolve_matcher(m, message, path, scope, wire, edition) for m in arg]}
+    if key in ("contains_message", "lacks_message") and isinstance(arg, dict):  # the symbols among its fields
+        return {key: {**arg, "fields": resolve_plain(arg.get("fields", {}), scope)}}
     return spec

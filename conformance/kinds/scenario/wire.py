@@ -7,24 +7,33 @@ the names a scenario uses for values (enumerations), and tells who sent a reply 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 
 @dataclass(frozen=True)
 class Addressing:
     """Who talks: the session (``system``, and one ``entity`` per scenario, so replies can be told apart), the
-    session's second system on the link (``other``: a second client, for steps sent ``as`` it) and the node
-    (``node``; None until learned). Suites without addresses leave them None."""
+    session's second system on the link (``other``: a second client, for steps sent ``as`` it), the node
+    (``node``; None until learned) and a system the session never announces (``stranger``: a sender the node has
+    never heard of, for a step's header). Suites without addresses leave them None."""
 
     system: int | None = None
     entity: int | None = None
     node: int | None = None
     other: int | None = None
+    stranger: int | None = None
 
     def speaking_as(self, who: str | None) -> "Addressing":
         """The addressing a step sends with: the session's (``who`` None) or its second system's (``"other"``)."""
-        return self if who is None else Addressing(self.other, self.entity, self.node, self.system)
+        return self if who is None else replace(self, system=self.other, other=self.system)
+
+    def for_entity(self, entity: int | None) -> "Addressing":
+        return replace(self, entity=entity)
+
+    def symbols(self) -> dict:
+        """What ``{"$address": NAME}`` resolves to."""
+        return {"system": self.system, "node": self.node, "other": self.other, "stranger": self.stranger}
 
     def from_node(self, wire, parsed) -> bool:
         """Whether something arrived from the node (true where the protocol has no addresses, or the node's id is
@@ -68,6 +77,7 @@ class Composed:
 
 class Wire(Protocol):
     transport: str  # "datagram" (a live target, --target) or "call" (a handler called through an adapter)
+    anyone: int | None  # the destination meaning any system (a request to it is for the node too), or None
 
     def compose(self, message: dict, encoding: str | None, addressing: Addressing, epoch: float,
                 step: str = "", edition: str | None = None) -> Composed:

@@ -43,7 +43,9 @@ class ImcCaptureRules:
         known = self.defs.by_abbrev  # a folder's own definitions may lack the messages of some exchanges
         exchanges = [ex for ex in (self.behaviour or {}).get("exchanges", [])
                      if ex["request"]["message"] in known and ex["reply"] in known]
-        tracker = PassiveExchanges(self.wire, exchanges, edition, scale, UNKNOWN_SYSTEM)
+        behaviour = self.behaviour or {}
+        tracker = PassiveExchanges(self.wire, exchanges, edition, scale, UNKNOWN_SYSTEM, behaviour.get("bounds"),
+                                   nobody=0, silence=behaviour.get("silence", ()))  # 0: DUNE's Announce goes to it
         self.watched = {self.defs[m].id for m in tracker.messages}
         return tracker
 

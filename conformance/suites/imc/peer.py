@@ -51,6 +51,7 @@ class ImcPeer:
         self.defs, self.system, self.node, self.service, self.host = defs, system, node, service, host
         self.epoch, self.name = epoch, name
         self.other = other_system(system, node)  # the second client: announced under its own name, same socket
+        self.stranger = other_system(self.other, node)  # never announced: a sender the node has not heard of
         self.notes = [f"the session's IMC id: {system:#06x} (chosen for this run; --src sets one)"] if chosen else []
         self.given = node is not None
         self.ready = self.given

@@ -18,6 +18,7 @@ NOT_JUDGED_CLAUSE = "imc-wire#field-types"  # what a frame the reference codec d
 
 class ImcWire:
     transport = "datagram"
+    anyone = UNKNOWN_SYSTEM  # 0xFFFF: unknown, or anyone (imc-wire.md, defaults)
 
     def __init__(self, defs: Definitions, rule_clauses: dict[str, str]):
         self.defs, self.rule_clauses = defs, rule_clauses

@@ -12,6 +12,7 @@ from .definitions import PRIMITIVES, RosDefinitions, TypeDef
 
 class RosWire:
     transport = "call"
+    anyone = None
 
     def __init__(self, defs: RosDefinitions):
         self.defs = defs

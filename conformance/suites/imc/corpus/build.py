@@ -49,7 +49,8 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
     files["provenance.md"] = provenance_markdown("IMC", rules_document(), case_documents(files))
     statements = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))["statements"]
     register = json.loads(imc_data("ambiguities.json").read_text(encoding="utf-8"))["ambiguities"]
-    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()), register)
+    bounds = json.loads(imc_data("exchanges.json").read_text(encoding="utf-8"))["bounds"]
+    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()), register, bounds)
     return files
 
 

@@ -33,8 +33,11 @@ from .world import (PEER, PEER_ID, UDP_PORT, VEHICLE, dune_argv, forget_state, i
 INSIDE = "IMC_CONFORMANCE_DUNE_NAMESPACE"
 PROFILES = ("seed", "dune")
 CLAIMS = {"description": "What DUNE (lauv-simulator-1, as configured here) implements: no SmsTx (DUNE has only "
-                         "SmsRequest, for a GSM modem on a serial port).",
-          "services": ["acoustic", "lbl", "iridium", "historic-data", "discovery"]}
+                         "SmsRequest, for a GSM modem on a serial port), no SystemGroup (no task handles it), and "
+                         "AcousticRequest only from its own system, addressed to itself: the local API its tasks use to "
+                         "reach the modem (src/Transports/UAN/Task.cpp:297-301); other systems use AcousticOperation.",
+          "services": ["acoustic", "lbl", "iridium", "historic-data", "discovery"],
+          "capabilities": {"acoustic-request": "self"}}
 CAPTURED_PORTS = {UDP_PORT, *range(30100, 30105)}
 FUZZ_BUDGET = 40
 ACOUSTIC_WARMUP = 30.0  # seconds after a (re)start before DUNE's acoustic tasks and modem simulator serve requests

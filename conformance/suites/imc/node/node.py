@@ -1,6 +1,9 @@
 """The reference node: what the seeds say a node does, sans-IO (the caller says what time it is and moves the
 datagrams). It behaves like DUNE where the seeds are silent: it talks only to systems that announced an
-``imc+udp`` service, heart-beats to them at 1 Hz and announces itself to them (unicast only) every 10 s. A
+``imc+udp`` service, heart-beats to them at 1 Hz and announces itself to them (unicast only) every 10 s; unlike DUNE
+it acts only on requests addressed to it or to anyone (0xFFFF), and, like DUNE, takes no datagram carrying its own id
+as a request (its own, heard back, or a forgery). A capability given in ``only_to_itself`` is served to its own system
+alone (DUNE serves AcousticRequest so). A
 hostile link cannot stall it: a service naming a host rather than an address is ignored (nothing is ever
 resolved), a contact not heard from for ``CONTACT_TTL`` seconds is forgotten and at most ``MAX_CONTACTS`` are
 kept (a flood of spoofed Announces cannot push out a contact that keeps talking), and a frame the reference
@@ -21,6 +24,7 @@ import itertools
 import random
 import re
 import struct
+from collections import deque
 
 from .. import codec
 from ....kinds.vector.errors import NotJudged
@@ -40,20 +44,27 @@ SERVICE_URL = re.compile(r"imc\+udp://([^:/;]+|\[[0-9a-fA-F:]+\]):([0-9]+)/?")
 MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
 LOSS_RUN = 2  # at most this many datagrams of one message dropped in a row by ``loss``
+SLOW_TURNAROUND = 4.0  # s a peer's modem takes to answer under the busy-then-completes variant
 
 
 class ReferenceNode:
     def __init__(self, defs: Definitions, behaviour: dict, *, edition: str, address: tuple[str, int],
                  name: str = "imc-reference", system: int = 0x00A0, peers: dict[str, float] | None = None,
                  loss: float = 0.0, dup: float = 0.0, seed: int = 0, broken: str | None = None,
-                 variant: str | None = None, epoch0: float = 1_700_000_000.0):
+                 variant: str | None = None, epoch0: float = 1_700_000_000.0, only_to_itself=()):
         if broken is not None and broken not in BREAKS:
             raise ValueError(f"unknown broken behaviour {broken!r}; one of: {', '.join(BREAKS)}")
         if variant is not None and variant not in VARIANTS:
             raise ValueError(f"unknown variant {variant!r}; one of: {', '.join(VARIANTS)}")
+        capabilities = behaviour["capabilities"]
+        unknown = [c for c in only_to_itself if c not in capabilities]
+        if unknown:
+            raise ValueError(f"unknown capability {unknown[0]!r}; one of: {', '.join(capabilities)}")
         self.variant = variant
         self.defs, self.wire, self.edition = defs, ImcWire(defs, {}), edition
         self.exchanges = behaviour["exchanges"]
+        self.own_only = {m for c in only_to_itself for m in capabilities[c]["requests"]}  # served to itself alone
+        self.turnaround = SLOW_TURNAROUND if variant == "busy-then-completes" else TURNAROUND
         self.address, self.name, self.system = address, name, system
         self.peers = dict(peers if peers is not None else {"imc-peer-1": 150.0, "imc-peer-2": 1200.0})
         self.loss, self.dup, self.rng, self.broken, self.epoch0 = loss, dup, random.Random(seed), broken, epoch0
@@ -62,10 +73,17 @@ class ReferenceNode:
         self.order = itertools.count()
         self.contacts: dict[int, tuple[str, int]] = {}
         self.heard_at: dict[int, float] = {}  # when each contact last sent a valid frame
+        self.strangers: dict[int, tuple[str, int]] = {}  # unannounced senders served (trusts-unannounced), bounded
         self.refused = 0  # Announces ignored: a host name for an address, or the contact table full
         self.modem_free_at = 0.0
         self.beacons: list = []
+        self.groups: dict[str, object] = {}  # SystemGroup: group name -> its list of systems
         self.kept: list[dict] = []  # RemoteCommands kept for resending
+        self.requests: dict[int, tuple[int, float]] = {}  # AcousticRequest req_id -> (its tag, when it ends)
+        self.cancelled: set[int] = set()  # tags of queued frames not to send (reused-id-cancels)
+        self.queries: deque = deque()  # when the latest HistoricDataQueries came (drops-when-many, exhausted-by-many)
+        self.dropped_ids: set[int] = set()  # the req_ids of the QUERYs dropped (drops-when-many)
+        self.exhausted = False
         self.acoustic_dead = False
         self.lbl_dead = False
         self.dropped = 0  # datagrams that did not decode
@@ -95,17 +113,39 @@ class ReferenceNode:
         order = codec.byte_order_of(data)
         if self.broken == "ignores-big-endian" and order == "be":
             return
-        src = message["header"]["src"]
+        src, dst = message["header"]["src"], message["header"]["dst"]
         if src in self.contacts:
             self.heard_at[src] = t
+        if src == self.system:  # its own id from the link: its own frame heard back, or a forgery
+            self.acoustic_dead = self.acoustic_dead or self.broken == "dies-on-own-id"
+            if self.broken != "trusts-own-id":
+                return
         if message["abbrev"] == "Announce":
             self._contact(t, src, _text(message["fields"]["services"]), source)
             return
-        if src not in self.contacts or self._lost(message):
+        if src not in self.contacts and src != self.system:
+            if self.variant != "trusts-unannounced":
+                return
+            self.strangers.pop(src, None)
+            self.strangers[src] = source
+            while len(self.strangers) > MAX_CONTACTS:
+                del self.strangers[next(iter(self.strangers))]
+        if self._lost(message) or self.exhausted or not self._for_me(message, dst):
             return
+        if message["abbrev"] in self.own_only and src != self.system:
+            return  # a local service: only the node's own system may ask for it
         handler = getattr(self, "_on_" + message["abbrev"], None)
         if handler is not None:
             handler(t, message)
+
+    def _for_me(self, message: dict, dst: int) -> bool:
+        """Whether the node acts on a request addressed to ``dst``: to it or to anyone; a query addressed elsewhere
+        too under answers-queries-for-others (a query changes nothing)."""
+        if dst == UNKNOWN_SYSTEM:
+            return self.broken != "ignores-anyone"
+        if dst == self.system or self.broken == "acts-on-others-requests":
+            return True
+        return self.variant == "answers-queries-for-others" and self._idempotent(message, reply=False)
 
     def due(self, t: float) -> list[tuple[tuple, bytes]]:
         """The datagrams to send by time ``t``: (destination address, bytes)."""
@@ -120,8 +160,9 @@ class ReferenceNode:
             self.next_announce = t + (60.0 if self.variant == "slow-announce" else 10.0)
             out += [(addr, self._announce(t)) for addr in self.contacts.values()]
         while self.queue and self.queue[0][0] <= t:
-            _, _, dest, data = heapq.heappop(self.queue)
-            out.append((dest, data))
+            _, _, dest, data, tag = heapq.heappop(self.queue)
+            if tag not in self.cancelled:
+                out.append((dest, data))
         return out
 
     # ------------------------------------------------------------------ discovery
@@ -153,14 +194,34 @@ class ReferenceNode:
         host, port = self.address
         host = f"[{host}]" if ":" in host else host
         services = f"imc+udp://{host}:{port}/;imc+info://0.0.0.0/version/{self.edition.removeprefix('imc-')}"
-        fields = {"sys_name": self.name, "sys_type": 2, "owner": UNKNOWN_SYSTEM, "lat": 0.0, "lon": 0.0,
+        fields = {"sys_name": self.name, "sys_type": 99 if self.broken == "unknown-system-type" else 2,
+                  "owner": UNKNOWN_SYSTEM, "lat": 0.0, "lon": 0.0,
                   "height": 0.0, "services": services}
         return self._frame(t, "Announce", fields, dst=0, ent=0, dst_ent=0)
 
     # ------------------------------------------------------------------ requests
 
     def _on_AcousticSystemsQuery(self, t: float, message: dict) -> None:
-        self._reply(t, PROCESSING, message, "AcousticSystems", {"list": ",".join(self.peers)})
+        names = ",".join(self.peers) + ("," if self.broken == "list-empty-items" else "")
+        self._reply(t, PROCESSING, message, "AcousticSystems", {"list": names})
+        if self.broken == "two-replies":
+            self._reply(t, PROCESSING + 0.1, message, "AcousticSystems", {"list": names})
+
+    def _on_SystemGroup(self, t: float, message: dict) -> None:
+        """Set and Chg store a group's list of systems, Dis forgets it, Req is answered with a Rep."""
+        f = message["fields"]
+        action, name = self._name("SystemGroup", "Action", f["Action"]), _text(f["GroupName"])
+        if action in ("Set", "Chg"):
+            self.groups.pop(name, None)
+            self.groups[name] = f["GroupList"]
+            while len(self.groups) > MAX_CONTACTS:
+                del self.groups[next(iter(self.groups))]
+        elif action == "Dis":
+            self.groups.pop(name, None)
+        elif action == "Req" and self.broken != "no-group-report":
+            self._reply(t, PROCESSING, message, "SystemGroup", {"GroupName": f["GroupName"],
+                                                                "Action": self._v("SystemGroup", "Action", "Rep"),
+                                                                "GroupList": self.groups.get(name, "")})
 
     def _on_LblConfig(self, t: float, message: dict) -> None:
         op = message["fields"]["op"]
@@ -168,7 +229,7 @@ class ReferenceNode:
             return
         if op == self._v("LblConfig", "op", "SET_CFG"):
             merged = self.beacons if self.broken == "merges-set-cfg" else []
-            self.beacons = merged + list(message["fields"]["beacons"])
+            self.beacons = merged + [_rounded(b) if self.broken == "rounds-beacons" else b for b in message["fields"]["beacons"]]
             if self.broken == "acknowledges-set-cfg":
                 self._reply(t, PROCESSING, message, "LblConfig", {"op": self._v("LblConfig", "op", "CUR_CFG"),
                                                                   "beacons": self.beacons})
@@ -199,7 +260,9 @@ class ReferenceNode:
             state(PROCESSING, "UNSUPPORTED")  # an operation the definitions do not have
         if op not in plans:
             return  # a state (sent by another node), not a request
-
+        distance = self.peers.get(_text(f["system"]))
+        if distance is None and self.variant == "silent-to-unknown-systems":
+            return  # it cannot route the request
         if t < self.modem_free_at:
             state(PROCESSING, "BUSY")
             if self.variant == "busy-then-completes":
@@ -209,13 +272,15 @@ class ReferenceNode:
         silent = self.variant == "silent-where-allowed"
         if silent and (op in ("MSG_SHORT", "REVERSE_RANGE") or f["msg"] is None and op == "MSG"):
             return
+        if op == "REVERSE_RANGE" and self.variant == "declines-reverse-range":
+            state(PROCESSING, "UNSUPPORTED")
+            return
         if op in ("MSG", "MSG_SHORT") and f["msg"] is None:
             state(PROCESSING, failure)  # nothing to send: the request cannot be fulfilled
             return
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
-        distance = self.peers.get(_text(f["system"]))
-        travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + TURNAROUND
+        travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + self.turnaround
         self.modem_free_at = t + travel
         if self.variant == "queued-first" and progress == "MSG_IP":
             state(PROCESSING / 2, "MSG_QUEUED")
@@ -237,17 +302,26 @@ class ReferenceNode:
             return
         echoed_type = self._v("AcousticStatus", "type", "MSG") if self.broken == "type-not-echoed" else f["type"]
         req_id = (f["req_id"] + 1) % 0x10000 if self.broken == "req-id-not-echoed" else f["req_id"]
+        tag, previous = next(self.order), self.requests.get(f["req_id"])
+        if previous is not None and previous[1] > t and self.broken == "reused-id-cancels":
+            self.cancelled.add(previous[0])  # the outstanding request with this id says nothing more
 
         def status(delay: float, name: str, range_: float = 0.0, info: str = "") -> None:
             fields = {"req_id": req_id, "type": echoed_type, "status": self._status(name), "info": info, "range": range_}
-            self._reply(t, delay, message, "AcousticStatus", fields, entity=ACOUSTIC_ENTITY)
+            self._reply(t, delay, message, "AcousticStatus", fields, entity=ACOUSTIC_ENTITY, tag=tag)
 
+        distance = self.peers.get(_text(f["destination"]))
+        if distance is None and self.variant == "silent-to-unknown-systems":
+            return  # it cannot route the request
+        if kind == "REVERSE_RANGE" and self.variant in ("silent-where-allowed", "declines-reverse-range"):
+            if self.variant == "declines-reverse-range":
+                status(PROCESSING, "UNSUPPORTED", info="reverse ranges are not supported")
+            return
         if t < self.modem_free_at:
             status(PROCESSING, "BUSY", info="the modem is busy")
             if self.variant == "busy-then-completes":
                 self._on_AcousticRequest(self.modem_free_at, message)
             return
-        distance = self.peers.get(_text(f["destination"]))
         if kind == "RAW" and (f["msg"] is None or f["msg"]["abbrev"] != "DevDataBinary") and self.broken != "raw-accepted":
             status(PROCESSING, "UNSUPPORTED", info="RAW expects a DevDataBinary")
             return
@@ -257,11 +331,12 @@ class ReferenceNode:
         if distance is None:
             status(PROCESSING, "INV_ADDR", info="unknown destination")
             return
-        travel = 2 * distance / SOUND_SPEED + TURNAROUND
+        travel = 2 * distance / SOUND_SPEED + self.turnaround
         timeout = as_float(f["timeout"])
         if self.broken == "ignores-timeout":
             travel += timeout + 2.0
         self.modem_free_at = t + travel
+        self.requests[f["req_id"]] = (tag, t + travel)
         if self.variant == "queued-first":
             status(PROCESSING / 2, "QUEUED")
         status(PROCESSING, "IN_PROGRESS")
@@ -283,8 +358,9 @@ class ReferenceNode:
     def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
         req_id = message["fields"]["req_id"]
         req_id = (req_id + 1) % 0x10000 if self.broken == "req-id-not-echoed" else req_id
-        late = message["fields"]["ttl"] + 2.0 if self.broken == "transmits-after-ttl" else 0.0
-        for delay, name in ((PROCESSING, "QUEUED"), (0.2 + late, "TRANSMIT"), (0.5 + late, "OK")):
+        late = message["fields"]["ttl"] + 2.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
+        states = ((PROCESSING, "QUEUED"), (0.2 + late, "TRANSMIT"), (0.5 + late, "OK"))
+        for delay, name in states[::2] if self.broken == "late-ok" else states:
             fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": ""}
             self._reply(t, delay, message, "IridiumTxStatus", fields)
 
@@ -298,6 +374,14 @@ class ReferenceNode:
         f = message["fields"]
         req_id = (f["req_id"] + 1) % 0x10000 if self.broken == "req-id-not-echoed" else f["req_id"]
         kind = self._name("HistoricDataQuery", "type", f["type"])
+        self.queries.append(t)
+        while self.queries and self.queries[0] < t - 1.0:
+            self.queries.popleft()
+        if self.broken == "exhausted-by-many" and len(self.queries) >= 80:
+            self.exhausted = True  # no request is served from now on
+        if self.broken == "drops-when-many" and kind == "QUERY" and (len(self.queries) > 4 or req_id in self.dropped_ids):
+            self.dropped_ids.add(req_id)
+            return
         if kind == "CLEAR":
             self.kept.clear()
             fields = {"req_id": req_id, "type": f["type"], "max_size": f["max_size"], "data": None}
@@ -333,16 +417,19 @@ class ReferenceNode:
                 continue
             if item["abbrev"] == "HistoricSample" and (item["fields"]["priority"] > -127
                                                        or self.broken == "transmits-logged-samples"):
+                if self.broken == "rewrites-producer":
+                    item = {**item, "fields": {**item["fields"], "sys_id": message["header"]["src"]}}
                 self.kept.append(item)
             elif item["abbrev"] == "RemoteCommand":
                 self._on_RemoteCommand(t, dict(message, abbrev="RemoteCommand", fields=item["fields"]))
 
     def _on_RemoteCommand(self, t: float, message: dict) -> None:
         f = message["fields"]
-        if f["destination"] == self.system:
+        if f["destination"] == self.system or self.broken == "executes-others-commands":
             if f["cmd"] is not None and self.broken != "ignores-remote-commands":
                 self._execute(t, f)
-            return
+            if f["destination"] == self.system:
+                return
         if as_float(f["timeout"]) > self.epoch0 + t or self.broken == "keeps-expired-commands":
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
             self._forward(t)
@@ -355,6 +442,8 @@ class ReferenceNode:
         for command in [c for c in self.kept if c["abbrev"] == "RemoteCommand" and c["fields"]["destination"] in self.contacts]:
             self.kept.remove(command)
             destination = command["fields"]["destination"]
+            if self.broken == "forwards-as-own":
+                command = {**command, "fields": {**command["fields"], "original_source": self.system}}
             data = {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": [command]}
             frame = self._frame(t + PROCESSING, "HistoricData", data, dst=destination, ent=0)
             self._later(t, PROCESSING, self.contacts[destination], frame)
@@ -370,10 +459,11 @@ class ReferenceNode:
 
     # ------------------------------------------------------------------ sending
 
-    def _reply(self, t: float, delay: float, request: dict, abbrev: str, fields: dict, entity: int = 0) -> None:
+    def _reply(self, t: float, delay: float, request: dict, abbrev: str, fields: dict, entity: int = 0,
+               tag: int | None = None) -> None:
         header = request["header"]
         src = next(iter(self.contacts), header["src"]) if self.broken == "replies-to-first-client" else header["src"]
-        address = self.contacts.get(src)
+        address = self.contacts.get(src) or self.strangers.get(src)
         if address is None:
             return
         dst, dst_ent = (UNKNOWN_SYSTEM, UNKNOWN_ENTITY) if self.broken == "broadcast-replies" else (src, header["src_ent"])
@@ -383,12 +473,17 @@ class ReferenceNode:
         resendable = not request.get("executed")  # a command carried in HistoricData is never sent again
         if resendable and self._lost({"abbrev": abbrev, "fields": fields}, reply=True):
             return
-        self._later(t, delay, address, frame)
+        self._later(t, delay, address, frame, tag)
         if self.dup and self.rng.random() < self.dup:
-            self._later(t, delay + 0.001, address, frame)
+            self._later(t, delay + 0.001, address, frame, tag)
+        if self.broken == "replies-to-every-client":
+            for other, where in self.contacts.items():
+                if other != dst:
+                    copy = self._frame(t + delay + 0.001, abbrev, fields, dst=other, ent=entity, dst_ent=dst_ent)
+                    self._later(t, delay + 0.001, where, copy, tag)
 
-    def _later(self, t: float, delay: float, address: tuple, frame: bytes) -> None:
-        heapq.heappush(self.queue, (t + delay, next(self.order), address, frame))
+    def _later(self, t: float, delay: float, address: tuple, frame: bytes, tag: int | None = None) -> None:
+        heapq.heappush(self.queue, (t + delay, next(self.order), address, frame, tag))
 
     def _frame(self, t: float, abbrev: str, fields: dict, *, dst: int, ent: int, dst_ent: int = UNKNOWN_ENTITY) -> bytes:
         src = 0x0BAD if self.broken == "from-other-system" and abbrev not in ("Heartbeat", "Announce") else self.system
@@ -446,6 +541,16 @@ class ReferenceNode:
             if v.value == value and v.in_edition(self.edition):
                 return v.abbrev
         return None
+
+
+def _rounded(beacon: dict | None) -> dict | None:
+    """A beacon with its latitude and longitude kept as fp32 (rounds-beacons)."""
+    if beacon is None:
+        return None
+    fields = dict(beacon["fields"])
+    for name in ("lat", "lon"):
+        fields[name] = struct.unpack("<f", struct.pack("<f", as_float(fields[name])))[0]
+    return {**beacon, "fields": fields}
 
 
 def _text(value) -> str:

@@ -34,6 +34,10 @@ def add_command(sub) -> None:
     serve.add_argument("--variant", choices=sorted(VARIANTS), metavar="NAME",
                        help="a correct node taking another reading the seeds allow (vectors/imc/ambiguities.json): "
                             + "; ".join(f"{k}: {v}" for k, v in VARIANTS.items()))
+    serve.add_argument("--only-to-itself", action="append", default=[], metavar="CAPABILITY",
+                       help="serve this capability (vectors/imc/exchanges.json capabilities) only to the node's own "
+                            "system, as DUNE serves acoustic-request; run the suite with claims that say so "
+                            '({"capabilities": {"acoustic-request": "self"}})')
     serve.set_defaults(func=command_serve)
 
 
@@ -75,6 +79,9 @@ def command_serve(args) -> int:
         name, system = parse_system(args.system)
         peers = parse_peers(args.peer)
         family, address = resolve(args.host, args.port, "--host")
+        unknown = [c for c in args.only_to_itself if c not in suite.behaviour["capabilities"]]
+        if unknown:
+            raise ValueError(f"--only-to-itself {unknown[0][:40]!r}: one of {', '.join(suite.behaviour['capabilities'])}")
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
     if group_address(address[0]):
@@ -86,9 +93,10 @@ def command_serve(args) -> int:
     offset = time.time() - time.monotonic()
     node = ReferenceNode(suite.defs, suite.behaviour, edition=edition, address=sock.getsockname()[:2], name=name,
                          system=system, peers=peers, loss=args.loss, dup=args.dup, seed=args.seed, broken=args.broken,
-                         variant=args.variant, epoch0=offset)
+                         variant=args.variant, epoch0=offset, only_to_itself=tuple(args.only_to_itself))
     print(f"reference IMC node {name} (0x{system:04X}, {edition}) on {url(*sock.getsockname()[:2])}"
           + (f", broken: {args.broken}" if args.broken else "") + (f", variant: {args.variant}" if args.variant else "")
+          + (f", only to itself: {', '.join(args.only_to_itself)}" if args.only_to_itself else "")
           + "; Ctrl-C stops it", file=sys.stderr, flush=True)
     signal.signal(signal.SIGTERM, _interrupt)  # kill stops it as Ctrl-C does, with its summary
     try:
