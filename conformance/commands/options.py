@@ -205,14 +205,17 @@ def add_target(live, what: str) -> None:
                            "lets the robustness phase bisect to the frame that silenced it")
 
 
-def add_judging(parser) -> None:
-    """The options pcap and watch share: what to judge against, which frames, how to report."""
+def add_judging(parser, ports: bool = True) -> None:
+    """The options pcap, watch and log share: what to judge against, which frames, how to report (``ports``: the
+    UDP ports carrying the frames, which a log has none of)."""
     add_suite(parser)
     parser.add_argument("--vectors", type=Path, metavar="DIR",
                         help="a suite folder whose definitions to judge with (e.g. one made by generate --from)")
     parser.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
-    parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
-                        help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")
+    if ports:
+        parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
+                            help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, "
+                                 "30100-30104)")
     parser.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
     parser.add_argument("--list-frames", type=count, default=20, metavar="N",
                         help="failing frames listed per message and rule (default 20)")
