@@ -147,6 +147,10 @@ class ImcSuite(DataSuite):
         from .capture import ImcCaptureRules
         return ImcCaptureRules(self.defs, self.wire, self.rules, self.behaviour)
 
+    def log_reader(self, edition: str | None = None):
+        from .lsf import LsfReader
+        return LsfReader(self, edition)
+
     def open_target(self, target: str, **settings):
         from .live import open_target
         return open_target(self, target, **settings)
