@@ -102,7 +102,7 @@ def _reader(args, logs):
     heads = [head for _, _, head, _ in logs]
     if explicit:
         suite = open_suite(args.suite or _default_suite(), args.vectors)
-        reader = _log_reader(suite, args.edition)
+        reader = _log_reader(suite)
     else:
         suite, reader = _recognising(heads[0], logs[0][0])
     for path, _, head, _ in logs:
@@ -116,12 +116,10 @@ def _reader(args, logs):
         own.add(found)
     if len(own) > 1:
         raise UsageError("the logs come with different definitions beside them (IMC.xml): judge them one at a time")
-    found = own.pop()
-    if found is not None:
-        suite = found
-        reader = _log_reader(suite, args.edition)
+    suite = own.pop() or suite
     if args.edition is not None:
         chosen_edition(suite, args.edition)
+    reader = _log_reader(suite, args.edition)
     unknown = set(args.message) - set(reader.rules.keys)
     if unknown:
         raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
@@ -134,7 +132,7 @@ def _default_suite() -> str:
     return names()[0]
 
 
-def _log_reader(suite, edition: str | None):
+def _log_reader(suite, edition: str | None = None):
     try:
         return suite.log_reader(edition)
     except ValueError as exc:

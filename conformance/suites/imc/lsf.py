@@ -3,24 +3,28 @@ received, each whole (header, payload, CRC, in its sender's byte order), one aft
 (DUNE: ``IMC::Packet::serialize`` of each message into ``Data.lsf``, compressed as ``Data.lsf.gz`` or ``.bz2``;
 ``src/Transports/Logging/Task.cpp``). Sans-IO: ``LsfReader.units`` takes the decompressed bytes in pieces.
 
-A frame's size field says where the next frame begins. Where no synchronization number is (the log is damaged
-there), the reader skips to the next place where one is followed by a message id the definitions know, and says
-how many bytes it skipped; a frame cut by the end of the log is said, not judged.
+A frame's size field says where the next frame begins. A frame of an id IMC.xml does not define is taken as one
+only where its CRC holds; elsewhere, and where no synchronization number is, the log is damaged: the reader skips to
+the next place where a synchronization number is followed by an id IMC.xml defines, and says how many bytes it
+skipped. A frame the end of the log cuts is said, not judged.
 """
 
 from __future__ import annotations
 
 import struct
 from collections.abc import Iterator
+from itertools import chain
 from pathlib import Path
 
 from ...capture.logs import Logged
 from . import codec
+from .crc16 import arc
 
 SYNCS = (b"\x54\xfe", b"\xfe\x54")
 HEAD = {b"\x54\xfe": struct.Struct("<HHHd"), b"\xfe\x54": struct.Struct(">HHHd")}  # sync, mgid, size, timestamp
 LOOK = HEAD[SYNCS[0]].size  # bytes a frame's place needs before its size and time can be read
 OVERHEAD = codec.HEADER_SIZE + codec.FOOTER_SIZE
+FRAME, MORE, CUT, NONE = "frame", "more", "cut", "none"  # what a place in a log holds (LsfReader._at)
 
 
 class LsfReader:
@@ -33,7 +37,7 @@ class LsfReader:
         self.edition = edition or suite.editions[0]
         self.notes: list[str] = []
         known = suite.defs.by_id.keys() | suite.defs.ids_elsewhere  # where a frame may begin again after damage
-        self.ids = {order: frozenset(struct.pack(order + "H", i) for i in known) for order in "<>"}
+        self.ids = {sync: frozenset(struct.pack(order + "H", i) for i in known) for sync, order in zip(SYNCS, "<>")}
 
     def recognises(self, head: bytes) -> bool:
         return head[:2] in HEAD
@@ -45,57 +49,87 @@ class LsfReader:
 
     def units(self, pieces: Iterator[bytes], damage: list[str], name: str) -> Iterator[Logged]:
         buf, pos, base, number = b"", 0, 0, 0  # base: the log's byte at buf[0]
-        skipped = _Skipped()
-        for piece in pieces:
+        skipped, ids = _Skipped(), self.ids
+        for piece in chain(pieces, (b"",)):  # then b"": the end of the log
+            last = not piece
             buf, base, pos = buf[pos:] + piece, base + pos, 0
             n = len(buf)
-            while n - pos >= LOOK:
-                head = HEAD.get(buf[pos:pos + 2])
-                if head is None:
-                    found = self._next_frame(buf, pos, n)
+            while pos < n:
+                order = buf[pos:pos + 2]
+                head = HEAD.get(order)
+                if head is not None and n - pos >= LOOK:  # the common case: a frame of a message IMC.xml defines
+                    _, _, size, t = head.unpack_from(buf, pos)
+                    end = pos + OVERHEAD + size
+                    if end <= n and buf[pos + 2:pos + 4] in ids[order]:
+                        number += 1
+                        yield Logged(number, t, base + pos, buf[pos:end])
+                        pos = end
+                        continue
+                what, end, t = self._at(buf, pos, n, last)
+                if what is FRAME:
+                    number += 1
+                    yield Logged(number, t, base + pos, buf[pos:end])
+                    pos = end
+                elif what is NONE:
+                    found = self._next_frame(buf, pos, n, last)
                     skipped.add(base + pos, found - pos)
                     pos = found
-                    continue
-                _, _, size, t = head.unpack_from(buf, pos)
-                end = pos + OVERHEAD + size
-                if end > n:
-                    break  # the rest of the frame is in the next piece
-                number += 1
-                yield Logged(number, t, base + pos, buf[pos:end])
-                pos = end
-        self._ended(buf[pos:], base + pos, skipped, damage, name)
-
-    def _next_frame(self, buf: bytes, pos: int, n: int) -> int:
-        """Where the next frame may begin after the damage at ``pos``: a synchronization number followed by an id
-        IMC.xml defines; else the last bytes, which may begin one (the next piece tells)."""
-        at = pos + 1
-        while True:
-            found = [i for i in (buf.find(SYNCS[0], at), buf.find(SYNCS[1], at)) if i >= 0]
-            if not found:
-                return max(at, n - LOOK + 1)
-            i = min(found)
-            if i + 4 > n or buf[i + 2:i + 4] in self.ids["<" if buf[i] == 0x54 else ">"]:
-                return i
-            at = i + 1
-
-    def _ended(self, rest: bytes, offset: int, skipped: _Skipped, damage: list[str], name: str) -> None:
-        """What the end of the log says: bytes after the last whole frame (a cut frame, or not a frame)."""
-        head = HEAD.get(rest[:2])
-        if rest and head is None:
-            skipped.add(offset, len(rest))
+                else:
+                    break  # MORE: the rest is in the next piece; CUT: the log ends inside this frame
         if skipped.stretches:
             damage.append(f"{name}: {skipped.stretches:,} stretch{'es' if skipped.stretches != 1 else ''} of bytes "
                           f"that are no IMC frame ({skipped.count:,} bytes, the first at byte {skipped.first:,}): "
                           "skipped, each to the next synchronization number followed by a message id")
-        if rest and head is not None:
-            if len(rest) < 6:
-                damage.append(f"{name}: the log ends {len(rest)} bytes into a frame's header at byte {offset:,} (cut "
-                              f"short): judged up to it")
-                return
-            _, mgid, size = struct.unpack_from(head.format[:4], rest)
-            known = self.suite.defs.by_id.get(mgid)
-            damage.append(f"{name}: the log ends inside a frame of {known.abbrev if known else f'id {mgid}'} at byte "
-                          f"{offset:,} ({len(rest):,} of its {size + OVERHEAD:,} bytes; cut short): judged up to it")
+        if pos < len(buf):
+            damage.append(f"{name}: {self._cut(buf[pos:], base + pos)}: cut short, judged up to it")
+
+    def _at(self, buf: bytes, pos: int, n: int, last: bool) -> tuple[object, int, float]:
+        """What begins at ``pos`` besides a whole frame of a defined message: (FRAME, its end, its time) for a frame
+        of an id IMC.xml lacks whose CRC holds, MORE where the next piece must tell, CUT for a frame the end of the
+        log cuts, NONE for bytes that are no frame (then the next frame is looked for)."""
+        order = buf[pos:pos + 2]
+        head = HEAD.get(order)
+        if head is None:
+            return NONE, 0, 0.0
+        if n - pos < LOOK:
+            return (CUT if last else MORE), 0, 0.0
+        _, _, size, t = head.unpack_from(buf, pos)
+        end = pos + OVERHEAD + size
+        known = buf[pos + 2:pos + 4] in self.ids[order]
+        if end > n:
+            return (MORE if not last else CUT if known else NONE), 0, 0.0
+        if known or _sound(buf[pos:end], order):
+            return FRAME, end, t
+        return NONE, 0, 0.0
+
+    def _next_frame(self, buf: bytes, pos: int, n: int, last: bool) -> int:
+        """Where the next frame may begin after the damage at ``pos``: a synchronization number followed by an id
+        IMC.xml defines; else the end (of the log, or of the piece but for bytes that may begin a frame)."""
+        at = pos + 1
+        while True:
+            found = [i for i in (buf.find(SYNCS[0], at), buf.find(SYNCS[1], at)) if i >= 0]
+            if not found:
+                return n if last else max(at, n - LOOK + 1)
+            i = min(found)
+            if i + 4 > n or buf[i + 2:i + 4] in self.ids[buf[i:i + 2]]:
+                return i
+            at = i + 1
+
+    def _cut(self, rest: bytes, offset: int) -> str:
+        """What the end of the log cuts: a frame's header, or a frame of a message (how much of it is there)."""
+        if len(rest) < 6:
+            return f"the log ends {len(rest)} bytes into a frame's header at byte {offset:,}"
+        _, mgid, size = struct.unpack_from(HEAD[rest[:2]].format[:4], rest)
+        known = self.suite.defs.by_id.get(mgid)
+        return (f"the log ends inside a frame of {known.abbrev if known else f'id {mgid}'} at byte {offset:,} "
+                f"({len(rest):,} of its {size + OVERHEAD:,} bytes)")
+
+
+def _sound(frame: bytes, order: bytes) -> bool:
+    """Whether a whole frame's CRC holds (a little-endian frame and its CRC: their CRC is 0)."""
+    if order == SYNCS[0]:
+        return not arc(frame)
+    return arc(frame[:-2]) == int.from_bytes(frame[-2:], "big")
 
 
 class _Skipped:

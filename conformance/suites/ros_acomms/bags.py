@@ -85,8 +85,9 @@ class BagReader:
         except Damage as exc:
             damage.append(f"{name}: {exc}: the bag is read up to it")
         except Short as exc:
-            damage.append(f"{name}: the bag ends inside the record at byte {bag.record:,} ({exc} of it; cut "
-                          "short): read up to it")
+            where = f"at byte {bag.src.offset + exc.got:,}, inside the record that begins at byte {bag.record:,}"
+            damage.append(f"{name}: its index is cut short {where}: every chunk before it was read" if bag.index_begins
+                          else f"{name}: the bag ends {where} (cut short): read up to it")
         else:
             damage += [f"{name}: {problem}" for problem in bag.index_problems()]
         self.notes += bag.summary()
@@ -169,8 +170,12 @@ class _Bag:
         inner = Reader([content] if content else [])
         while not inner.at_end():
             start = inner.offset
-            op, record, length = _record_head(inner, at)
-            body = inner.take(length)
+            try:
+                op, record, length = _record_head(inner, at)
+                body = inner.take(length)
+            except Short:
+                raise Damage(f"the record at byte {start:,} of the chunk at byte {at:,} runs past the chunk's "
+                             "end") from None
             if op == CONNECTION:
                 yield from self._connection(record, body)
             elif op == MESSAGE:
@@ -326,25 +331,31 @@ def _text(raw: bytes) -> str:
 def _decompressed(compression: bytes, data: bytes, size: int, at: int) -> bytes:
     """A chunk's records, decompressed to at most ``size`` bytes (what its header says they are)."""
     if compression == b"none":
-        out = data
+        out, whole = data, True
     elif compression == b"bz2":
+        decoder = bz2.BZ2Decompressor()
         try:
-            out = bz2.BZ2Decompressor().decompress(data, size + 1)
+            out = decoder.decompress(data, size + 1)
         except (OSError, ValueError, EOFError) as exc:
             raise Damage(f"the chunk at byte {at:,} is damaged bz2 data ({exc})") from None
+        whole = decoder.eof
     elif compression == b"lz4":
         try:
             from lz4.frame import LZ4FrameDecompressor
         except ImportError:
             raise Damage(f"the chunk at byte {at:,} is lz4-compressed: reading it needs the lz4 package, which "
                          "the ros extra installs (pip install 'imc-conformance[ros]')") from None
+        decoder = LZ4FrameDecompressor()
         try:
-            out = LZ4FrameDecompressor().decompress(data, size + 1)
+            out = decoder.decompress(data, size + 1)
         except RuntimeError as exc:
             raise Damage(f"the chunk at byte {at:,} is damaged lz4 data ({exc})") from None
+        whole = decoder.eof
     else:
         raise Damage(f"the chunk at byte {at:,} is compressed with {_text(compression)[:40]!r}, which no bag uses")
-    if len(out) != size:
-        raise Damage(f"the chunk at byte {at:,} holds {len(out):,}{'+' if len(out) > size else ''} bytes, where its "
-                     f"header says {size:,}")
+    if len(out) > size:
+        raise Damage(f"the chunk at byte {at:,} holds more than the {size:,} bytes its header says")
+    if len(out) < size or not whole:
+        raise Damage(f"the chunk at byte {at:,} holds {len(out):,} bytes where its header says {size:,}, or its "
+                     "compressed data is cut")
     return out
