@@ -46,6 +46,7 @@ def report(path: Path) -> dict:
     doc = json.loads(path.read_text())
     doc["read"] = next(n for n in doc["notes"] if " frames read, " in n)
     doc["verdicts"] = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    doc["details"] = {c["id"]: [k["detail"] for k in c["checks"]] for m in doc["messages"] for c in m["cases"]}
     doc["counts"] = {c["id"]: {k["verdict"]: k["detail"] for k in c["checks"] if k["check"] == "count"}
                      for m in doc["messages"] for c in m["cases"]}
     return doc
@@ -139,11 +140,23 @@ def test_exchanges_in_a_log_are_judged(log, tmp_path, capsys):
 
 def test_an_exchange_open_across_a_jump_of_the_logs_clock_is_inconclusive(log, tmp_path, capsys):
     end = last_time(log)
-    (tmp_path / "Data.lsf").write_bytes(log + query(end + 1) + heartbeats(end + 5000, 40))  # another clock, far ahead
+    (tmp_path / "Data.lsf").write_bytes(log + query(end + 1) + heartbeats(end + 5000, 150))  # the clock set ahead
     code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
     doc = report(tmp_path / "r.json")
     assert doc["verdicts"][QUERY_ANSWERED] == "INCONCLUSIVE" and code == 0
     assert any("the log's clock jumped ahead 1 times" in n for n in doc["notes"])
+    assert "not judged: the log's clock jumped meanwhile" in doc["details"][QUERY_ANSWERED][1]
+
+
+def test_frames_stamped_by_another_clock_do_not_move_the_logs(log, tmp_path, capsys):
+    end = last_time(log)
+    burst = b"".join(heartbeats(end + 5000, 1) for _ in range(150))  # stamped alike, far ahead: no running clock
+    (tmp_path / "Data.lsf").write_bytes(log + query(end + 1) + burst + heartbeats(end + 2, 40))
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert doc["verdicts"][QUERY_ANSWERED] == "FAIL" and code == 1
+    assert "150 frames stamped more than 10 s from the log's clock (another system's clock, or no time) were timed " \
+           "by the log's" in doc["notes"]
 
 
 QUERY_ANSWERED = "imc/AcousticSystemsQuery/capture/exchange/acoustic-systems/answered"

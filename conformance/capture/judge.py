@@ -20,6 +20,7 @@ from .records import Record
 FRAME_CLAUSE = "the byte rules of the suite's corpus (rules.json)"
 RECENT = 256  # watched frames remembered to recognise a datagram the network duplicated
 CLOCK_JUMP = 10.0  # seconds a log's clock may jump ahead before the exchanges open across the jump go unjudged
+CLOCK_CONFIRM = 100  # frames in a row that move a log's clock ahead by more (a running clock, not a burst)
 MAX_TIME = 1e11  # seconds since the epoch: a logged frame's timestamp beyond (or not a number) is no time
 
 
@@ -79,6 +80,8 @@ class CaptureJudge:
         self.lost = 0  # datagrams the watcher lost before it could read them (the kernel dropped them)
         self.log = log  # the frames come from logs (``logged``), not from datagrams
         self.jumps = 0  # times a log's clock jumped ahead by more than CLOCK_JUMP
+        self.strays = 0  # logged frames stamped too far from the log's clock to move it, timed by it
+        self.ahead: list | None = None  # frames in a row ahead of the clock: [first time, latest time, how many]
 
     def losses(self, start: float, end: float, count: int) -> None:
         """``count`` datagrams were lost between ``start`` and ``end`` (a live watcher's receive buffer)."""
@@ -110,21 +113,33 @@ class CaptureJudge:
 
     def logged(self, got: Logged, source: str = "") -> None:
         """Judge one frame of a log (``source`` names its file when there are several). A log records no time of
-        reception: its frames are timed by their own timestamps, kept from going back (a clock behind the log's
-        does not move it); where the time jumps ahead by more than CLOCK_JUMP seconds (another system's clock, or
-        a gap in the log), an exchange open across the jump is not judged on its bound (INCONCLUSIVE)."""
+        reception: its frames are timed by their own timestamps on the log's clock, which never goes back. A frame
+        stamped more than CLOCK_JUMP seconds from it (another system's clock, a frame with no time, a burst of
+        frames stamped alike) is timed by the clock. Only a running clock moves it ahead by more: CLOCK_CONFIRM
+        frames in a row, each within CLOCK_JUMP of the one before, over a second at least (a gap in the log, or its
+        clock set); an exchange open across such a jump is not judged on its bound (INCONCLUSIVE)."""
         t, last = got.time, self.last
         if self.origin is None:
             t = got.time = self.origin = self.last = t if -MAX_TIME < t < MAX_TIME else 0.0
         elif not last - CLOCK_JUMP < t < last + CLOCK_JUMP:
-            if last + CLOCK_JUMP <= t < MAX_TIME:
-                self.jumps += 1
-                self.tracker.lost(last, t, "the log's clock jumped meanwhile")
-                self.last = t
-            else:  # behind the log's clock, or no time at all: when the frame before it was
+            ahead = self.ahead
+            if not last + CLOCK_JUMP <= t < MAX_TIME:
+                pass  # behind the clock, or no time
+            elif ahead is None or not -CLOCK_JUMP < t - ahead[1] < CLOCK_JUMP:
+                self.ahead = [t, t, 1]  # from, latest, frames: a clock ahead, perhaps
+            else:
+                ahead[1], ahead[2] = t, ahead[2] + 1
+                if ahead[2] >= CLOCK_CONFIRM and ahead[1] - ahead[0] >= 1.0:
+                    self.jumps += 1
+                    self.tracker.lost(last, t, "the log's clock jumped meanwhile")
+                    self.last, self.ahead, last = t, None, t
+            if t != last:
+                self.strays += 1
                 t = got.time = last
-        elif t > last:
-            self.last = t
+        else:
+            self.ahead = None
+            if t > last:
+                self.last = t
         self.records += 1
         if source is not self.source or not self.sources:
             self._from(source)
@@ -284,9 +299,12 @@ class CaptureJudge:
         if self.duplicates:
             out.append(f"{self.duplicates:,} datagrams identical to one shortly before (duplicated by the network) "
                        "were judged once by the exchange rules")
+        if self.strays:
+            out.append(f"{self.strays:,} frames stamped more than {CLOCK_JUMP:g} s from the log's clock (another "
+                       "system's clock, or no time) were timed by the log's")
         if self.jumps:
-            out.append(f"the log's clock jumped ahead {self.jumps:,} times by more than {CLOCK_JUMP:g} s (a frame "
-                       "stamped by another clock, or a gap in the log): an exchange open across a jump is INCONCLUSIVE")
+            out.append(f"the log's clock jumped ahead {self.jumps:,} times by more than {CLOCK_JUMP:g} s (a gap in the "
+                       "log, or its clock set): an exchange open across a jump is INCONCLUSIVE")
         if self.dissector.held or self.dissector.given_up:
             out.append(f"{len(self.dissector.held) + self.dissector.given_up:,} IP datagrams never reassembled "
                        "(fragments missing from the capture)")
