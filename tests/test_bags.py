@@ -181,11 +181,12 @@ def test_a_message_the_codec_refuses_fails_with_its_place(tmp_path, capsys):
 
 # ---------------------------------------------------------------- the reading, against rosbags'
 
-def read(path: Path) -> tuple[list, list[str], list[str]]:
-    """(topic, time in ns, bytes) of every message as the suite reads the bag; its damage; its notes."""
+def read(path: Path, piece: int = 1 << 16) -> tuple[list, list[str], list[str]]:
+    """(type, time in ns, bytes) of every message as the suite reads the bag (in pieces of ``piece`` bytes); its
+    damage; its notes."""
     reader, damage = SUITE.log_reader(), []
     with open(path, "rb") as handle:
-        units = list(reader.units(iter(lambda: handle.read(1 << 16), b""), damage, path.name))
+        units = list(reader.units(iter(lambda: handle.read(piece), b""), damage, path.name))
     out = []
     for unit in units:
         if unit.__class__ is Logged:
@@ -201,6 +202,7 @@ def test_what_is_read_is_what_rosbags_reads(tmp_path, compression):
         assert len(theirs.chunk_infos) > 2
         expected = [(c.msgtype.replace("/msg/", "/"), t, bytes(d)) for c, t, d in theirs.messages()]
     assert ours == expected and damage == []
+    assert read(bag, 97)[:2] == (expected, [])  # the same, whatever the pieces the bytes come in
 
 
 # ---------------------------------------------------------------- hostile bags

@@ -325,6 +325,24 @@ def test_streams_decompress_in_bounded_pieces(log):
         assert b"".join(pieces) == data and max(map(len, pieces)) <= streams.PIECE and not stream.damage
 
 
+@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(sizes=st.lists(st.integers(1, 300), min_size=1, max_size=20), garbage=st.binary(max_size=40))
+def test_a_log_read_in_any_pieces_gives_the_same_frames(log, sizes, garbage):
+    data = log[:4000] + garbage + log[4000:8000]
+    pieces, pos, i = [], 0, 0
+    while pos < len(data):
+        pieces.append(data[pos:pos + sizes[i % len(sizes)]])
+        pos += sizes[i % len(sizes)]
+        i += 1
+    reader = SUITE.log_reader()
+    whole, split = [], []
+    for source, out in (([data], whole), (pieces, split)):
+        damage: list[str] = []
+        out += [(u.offset, u.payload) for u in reader.units(iter(source), damage, "x")]
+        out.append(damage)
+    assert split == whole
+
+
 @pytest.fixture(scope="module")
 def small_logs(log):
     part = log[:frame_ends(log)[40]]

@@ -87,12 +87,14 @@ class LsfReader:
         """What begins at ``pos`` besides a whole frame of a defined message: (FRAME, its end, its time) for a frame
         of an id IMC.xml lacks whose CRC holds, MORE where the next piece must tell, CUT for a frame the end of the
         log cuts, NONE for bytes that are no frame (then the next frame is looked for)."""
+        if n - pos < LOOK and not last:
+            return MORE, 0, 0.0
         order = buf[pos:pos + 2]
         head = HEAD.get(order)
         if head is None:
             return NONE, 0, 0.0
         if n - pos < LOOK:
-            return (CUT if last else MORE), 0, 0.0
+            return CUT, 0, 0.0
         _, _, size, t = head.unpack_from(buf, pos)
         end = pos + OVERHEAD + size
         known = buf[pos + 2:pos + 4] in self.ids[order]
