@@ -12,6 +12,7 @@ from __future__ import annotations
 import bz2
 import gzip
 import json
+import random
 import re
 import shutil
 import struct
@@ -319,7 +320,11 @@ def test_streams_decompress_in_bounded_pieces(log):
             self.pos += len(out)
             return out
     data = (log * 700)[:3 << 20]
-    for packed in (gzip.compress(data), bz2.compress(data[:1 << 20]) + bz2.compress(data[1 << 20:]), data):
+    noise = random.Random(0).randbytes(3 << 20)  # incompressible: members straddle the pieces read from the file
+    members = [noise[i:i + 700_001] for i in range(0, len(noise), 700_001)]
+    for packed, data in ((gzip.compress(data), data), (bz2.compress(data[:1 << 20]) + bz2.compress(data[1 << 20:]), data),
+                         (data, data), (b"".join(gzip.compress(m) for m in members), noise),
+                         (b"".join(bz2.compress(m) for m in members), noise)):
         stream = streams.Stream(Path("x"), File(packed), len(packed))
         pieces = list(stream.pieces())
         assert b"".join(pieces) == data and max(map(len, pieces)) <= streams.PIECE and not stream.damage

@@ -31,11 +31,12 @@ class Stream:
     """A log file's decompressed bytes (``pieces()``), with what was found on the way: its ``compression``
     (None, "gzip" or "bzip2"), the bytes read from the file (``read``) and produced (``produced``), and ``damage``."""
 
-    def __init__(self, path: Path, handle, limit: int):
-        self.path, self.handle, self.limit = path, handle, limit
+    def __init__(self, path: Path, handle, limit: int, sized: bool = False):
+        self.path, self.handle, self.limit, self.sized = path, handle, limit, sized  # sized: a file of that size
         self.compression: str | None = None
         self.read = self.produced = 0
         self.damage: list[str] = []
+        self.ended = False  # no byte more is read (the end, the bound, or an error)
 
     def pieces(self) -> Iterator[bytes]:
         first = self._raw(PIECE)
@@ -52,15 +53,21 @@ class Stream:
                 first = self._raw(PIECE)
 
     def _raw(self, size: int) -> bytes:
-        """At most ``size`` bytes more of the file, never past ``limit`` (a device or a pipe is a file)."""
-        size = min(size, self.limit - self.read)
-        if size <= 0:
-            if self.read >= self.limit and self.handle.read(1):
-                self.damage.append(f"{self.path}: more than {self.limit >> 20} MB through a pipe or device: "
-                                   "judged up to there")
+        """At most ``size`` bytes more of the file, never past ``limit`` (a device or a pipe is a file; a regular
+        file is read to the size it had when opened)."""
+        if self.ended or size <= 0:
             return b""
-        data = self.handle.read(size)
+        try:
+            size = min(size, self.limit - self.read)
+            data = self.handle.read(size) if size > 0 else b""
+            if not data and not self.sized and self.read >= self.limit and self.handle.read(1):
+                self.damage.append(f"{self.path}: more than {self.limit >> 20} MB through a pipe or device: judged "
+                                   "up to there")
+        except OSError as exc:
+            self.damage.append(f"{self.path}: cannot read on after byte {self.read:,}: {exc.strerror or exc}")
+            data = b""
         self.read += len(data)
+        self.ended = not data
         return data
 
     def _decompressed(self, data: bytes, fresh, magic: bytes) -> Iterator[bytes]:
@@ -123,7 +130,8 @@ def open_stream(path: Path) -> Stream:
         info = os.fstat(handle.fileno())
     except OSError as exc:
         raise ValueError(f"cannot read {path}: {exc.strerror or exc}") from None
-    return Stream(path, handle, info.st_size if stat.S_ISREG(info.st_mode) else PIPE_LIMIT)
+    regular = stat.S_ISREG(info.st_mode)
+    return Stream(path, handle, info.st_size if regular else PIPE_LIMIT, sized=regular)
 
 
 class Short(ValueError):
