@@ -96,7 +96,7 @@ def judged(path: Path, capsys, *argv) -> tuple[int, dict, str]:
 
 
 def by_edition(doc: dict) -> str:
-    return next(n for n in doc["notes"] if n.startswith("connections of ros_acomms_msgs types by the edition"))
+    return next(n for n in doc["notes"] if ": connections of ros_acomms_msgs types by the edition" in n)
 
 
 # ---------------------------------------------------------------- editions told apart
@@ -268,6 +268,15 @@ def test_a_chunk_larger_than_it_says_or_than_is_read_at_once(tmp_path, monkeypat
     monkeypatch.setattr(bags, "CHUNK_LIMIT", 99)
     _, damage, _ = read(tmp_path / "bomb.bag")
     assert "more than the 0 MB read at once" in damage[0]
+
+
+def test_a_record_claiming_gigabytes_is_refused_before_it_is_read(tmp_path):
+    data = bytearray(edition_bag(tmp_path / "b.bag", "seed").read_bytes())
+    data[4109:4113] = struct.pack("<I", 0xFFFFFFF0)  # the first chunk's header length
+    (tmp_path / "huge.bag").write_bytes(bytes(data))
+    _, damage, _ = read(tmp_path / "huge.bag")
+    assert damage == ["huge.bag: the record at byte 4,109 claims a 4,294,967,280-byte header, more than the 4 MB read "
+                      "at once: the bag is read up to it"]
 
 
 def test_an_lz4_chunk_without_its_package_is_one_line(tmp_path, monkeypatch):

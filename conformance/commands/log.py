@@ -82,7 +82,7 @@ def _opened(path: Path):
     first = next(pieces, b"")
     if not first:
         stream.handle.close()
-        raise UsageError(f"{path}: {'; '.join(stream.damage) or 'empty, not a log'}")
+        raise UsageError("; ".join(stream.damage) or f"{path}: empty, not a log")
     return path, stream, first[:HEAD], _again(first, pieces)
 
 

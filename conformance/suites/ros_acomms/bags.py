@@ -90,7 +90,7 @@ class BagReader:
                           else f"{name}: the bag ends {where} (cut short): read up to it")
         else:
             damage += [f"{name}: {problem}" for problem in bag.index_problems()]
-        self.notes += bag.summary()
+        self.notes += bag.summary(name)
 
 
 class _Channel:
@@ -145,6 +145,9 @@ class _Bag:
                 self.chunks_read += 1
                 yield from self._chunk(fields, self.src.take(size))
             elif op == CONNECTION:  # outside a chunk: the index's copy of a connection
+                if size > HEADER_LIMIT:
+                    raise Damage(f"the connection record at byte {self.record:,} holds {size:,} bytes, more than the "
+                                 f"{HEADER_LIMIT >> 20} MB read at once")
                 self.index_found[0] += 1
                 yield from self._connection(fields, self.src.take(size))
             elif op == CHUNK_INFO:
@@ -270,10 +273,10 @@ class _Bag:
                     f"record: {self.chunks_read} chunks)"]
         return []
 
-    def summary(self) -> list[str]:
+    def summary(self, name: str) -> list[str]:
         if not self.by_edition:
             return []
-        return ["connections of ros_acomms_msgs types by the edition that recorded them: " + "; ".join(
+        return [f"{name}: connections of ros_acomms_msgs types by the edition that recorded them: " + "; ".join(
             f"{editions}: {', '.join(labels[:6])}{' ...' if len(labels) > 6 else ''}"
             for editions, labels in self.by_edition.items())]
 
