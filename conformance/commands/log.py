@@ -27,8 +27,7 @@ def add(sub) -> None:
                                      "every frame, every exchange")
     log.add_argument("files", nargs="+", metavar="FILE", help="logs of one format (DUNE's Data.lsf[.gz|.bz2], a "
                                                                "ROS 1 .bag; - reads standard input)")
-    add_judging(log, ports=False)
-    log.set_defaults(suite=None)  # chosen by the first log's format unless given
+    add_judging(log, log=True)
     log.add_argument("--src", type=system, metavar="ID", help="only frames from this system id")
     log.add_argument("--dst", type=system, metavar="ID", help="only frames to this system id")
     log.add_argument("--host", type=system, metavar="ID", help="only frames from or to this system id (keeps whole "
