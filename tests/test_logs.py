@@ -11,11 +11,13 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import io
 import json
 import random
 import re
 import shutil
 import struct
+import sys
 from pathlib import Path
 
 import pytest
@@ -205,6 +207,27 @@ def test_filters_by_message_system_and_time(log, tmp_path, capsys):
     with pytest.raises(SystemExit):
         run(tmp_path / "Data.lsf", "--host", "10.0.0.1", capsys=capsys)
     assert "a log holds no IP addresses: give a system id" in capsys.readouterr().err
+
+
+def test_a_log_read_from_standard_input(log, tmp_path, monkeypatch, capsys):
+    class Stdin:
+        buffer = io.BytesIO(gzip.compress(log))
+    monkeypatch.setattr(sys, "stdin", Stdin)
+    code, out = run("-", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 0 and doc["read"].startswith("600 frames read")
+    assert "read from standard input: no IMC.xml beside it, the suite's definitions judge it" in doc["notes"]
+
+
+def test_logs_with_different_definitions_beside_them_are_judged_one_at_a_time(log, tmp_path, capsys):
+    for name, version in (("a", "5.4.30"), ("b", "5.4.31")):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "Data.lsf").write_bytes(log)
+        (tmp_path / name / "IMC.xml").write_text(
+            fetch_imc_xml().read_text(encoding="utf-8").replace('version="5.4.30"', f'version="{version}"', 1))
+    code, out = run(tmp_path / "a" / "Data.lsf", tmp_path / "b" / "Data.lsf", capsys=capsys)
+    assert code == 2 and "the logs come with different definitions beside them (IMC.xml): judge them one at a " \
+                         "time" in one_line(out)
 
 
 # ---------------------------------------------------------------- hostile logs
