@@ -48,7 +48,7 @@ def _read(path: Path) -> bytes:
     finally:
         stream.handle.close()
     if stream.damage:
-        raise ValueError(stream.damage[0].split(": ", 1)[1])
+        raise ValueError(stream.damage[0].removeprefix(f"{path}: "))
     return b"".join(out)
 
 
