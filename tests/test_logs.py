@@ -226,8 +226,7 @@ def test_logs_with_different_definitions_beside_them_are_judged_one_at_a_time(lo
         (tmp_path / name / "IMC.xml").write_text(
             fetch_imc_xml().read_text(encoding="utf-8").replace('version="5.4.30"', f'version="{version}"', 1))
     code, out = run(tmp_path / "a" / "Data.lsf", tmp_path / "b" / "Data.lsf", capsys=capsys)
-    assert code == 2 and "the logs come with different definitions beside them (IMC.xml): judge them one at a " \
-                         "time" in one_line(out)
+    assert code == 2 and "the logs come with different definitions beside them: judge them one at a time" in one_line(out)
 
 
 # ---------------------------------------------------------------- hostile logs

@@ -1,7 +1,7 @@
 """Mission logs as a source of frames for the capture judge: what a suite's log reader yields (``Logged`` frames,
 and ``Finding``s on what the log says about them, such as a bag connection's definition) and the contract such a
 reader meets. A log is judged by the same code as captured datagrams (``CaptureJudge.logged``); only reading it is
-the suite's (IMC: LSF; ros_acomms: ROS 1 bags). Names no protocol."""
+the suite's (``Suite.log_reader``). Names no protocol."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The bytes of a log file, read in bounded pieces and decompressed as they come: plain, gzip (every member of a
-multi-member file, as DUNE's Logging task writes them) or bzip2 (every stream), told apart by their content, not
+multi-member file, as loggers that flush write them) or bzip2 (every stream), told apart by their content, not
 their name. Memory stays flat whatever the size: each piece is at most ``PIECE`` bytes before and after
 decompression. What cannot be read is said in ``damage`` (one line each), never raised, after the pieces before it:
 a stream cut short, bytes after the last stream, damaged compressed data, and output beyond ``BOMB_RATIO`` times the
@@ -22,7 +22,7 @@ from pathlib import Path
 from ..limits import PIPE_LIMIT
 
 PIECE = 1 << 20  # bytes read and decompressed at a time
-BOMB_RATIO = 200  # decompressed bytes per compressed byte beyond which a stream is refused (DUNE's logs: 2 to 10)
+BOMB_RATIO = 200  # decompressed bytes per compressed byte beyond which a stream is refused (DUNE's gzip logs: about 2.5)
 BOMB_FLOOR = 64 << 20  # decompressed bytes before the ratio is applied (a small stream may compress better)
 GZIP, BZIP2 = b"\x1f\x8b", b"BZh"
 

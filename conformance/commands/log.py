@@ -1,7 +1,7 @@
 """``imc-conformance log``: judge mission logs frame by frame and exchange by exchange, as captures are judged. Each
 suite reads its own format (``Suite.log_reader``: IMC's LSF, plain or compressed; ros_acomms' ROS 1 bags); without
 ``--suite`` or ``--vectors`` the format of the first file chooses the suite, and a log that brings its own
-definitions (an IMC.xml beside an LSF log) is judged by them."""
+definitions (files beside it: ``LogReader.beside``) is judged by them."""
 
 from __future__ import annotations
 
@@ -114,7 +114,7 @@ def _reader(args, logs):
         damage += problems
         own.add(found)
     if len(own) > 1:
-        raise UsageError("the logs come with different definitions beside them (IMC.xml): judge them one at a time")
+        raise UsageError("the logs come with different definitions beside them: judge them one at a time")
     suite = own.pop() or suite
     if args.edition is not None:
         chosen_edition(suite, args.edition)

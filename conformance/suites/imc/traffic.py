@@ -110,13 +110,10 @@ def grow_log(recorded: bytes, path, size: int) -> dict:
     """Write an LSF log of at least ``size`` bytes made of a recorded log's frames (little-endian, as DUNE writes)
     again and again, each round later by the recording's span (its timestamps moved, its CRCs redone); what it
     holds (frames, bytes)."""
-    from .lsf import OVERHEAD
+    from .lsf import LsfReader
+    from .suite import load
 
-    frames, pos = [], 0
-    while pos + OVERHEAD <= len(recorded):
-        end = pos + OVERHEAD + struct.unpack_from("<H", recorded, pos + 4)[0]
-        frames.append(recorded[pos:end - 2])
-        pos = end
+    frames = [u.payload[:-2] for u in LsfReader(load(), None).units(iter([recorded]), [], "the recording")]
     times = [struct.unpack_from("<d", f, 6)[0] for f in frames]
     span = max(times) - min(times) + 1.0
     written = rounds = 0
