@@ -229,6 +229,21 @@ def test_logs_with_different_definitions_beside_them_are_judged_one_at_a_time(lo
     assert code == 2 and "the logs come with different definitions beside them: judge them one at a time" in one_line(out)
 
 
+def test_what_the_judge_remembers_of_frames_stays_small(tmp_path):
+    """Decoded payloads are remembered to judge repeats at once, but not a large one, nor the fields of a valid
+    frame no exchange reads: a log of gigabytes of distinct frames does not fill the memory."""
+    reader = SUITE.log_reader()
+    judge = CaptureJudge("imc", reader.rules, reader.edition, Selection(), log=True)
+    texts = [codec.encode(SUITE.defs, {"abbrev": "TextMessage", "fields": {"origin": "x", "text": f"{i:04d}" * n},
+                                       "header": {"timestamp": 1.7e9 + i, "src": 1, "src_ent": 0, "dst": 2,
+                                                  "dst_ent": 0}}, "le") for i, n in ((1, 10), (2, 1000))]
+    for unit in reader.units(iter([b"".join(texts)]), [], "x"):
+        judge.logged(unit)
+    seen = reader.rules.seen
+    assert len(seen) == 1 and next(iter(seen.values())).fields is None  # the small one, without its fields
+    assert judge.valid["TextMessage"][0] == 2
+
+
 # ---------------------------------------------------------------- hostile logs
 
 @pytest.mark.parametrize("where", ["inside a header's first bytes", "inside a header", "inside a payload",

@@ -20,6 +20,7 @@ from .wire import NOT_JUDGED_CLAUSE, UNKNOWN_SYSTEM, ImcWire
 
 PORTS = frozenset([*range(6001, 6031), *range(30100, 30105)])  # DUNE's node ports and its discovery ports
 SEEN_LIMIT = 1 << 16  # decoded payloads remembered (repeated statuses and requests decode once)
+SEEN_SIZE = 512  # bytes of a payload remembered at most (the memory stays flat whatever the frames)
 UNIDENTIFIED = "unidentified"  # frames whose message id cannot be read or is the null id
 LITTLE = b"\x54\xfe"
 HEAD = {LITTLE: struct.Struct("<HHH"), b"\xfe\x54": struct.Struct(">HHH")}
@@ -82,9 +83,12 @@ class ImcCaptureRules:
         known = self.seen.get(payload)
         if known is None:
             known = self._decoded(p, group)
-            if len(self.seen) >= SEEN_LIMIT:
-                self.seen.clear()
-            self.seen[payload] = known
+            if known.rule is None and mgid not in self.watched:
+                known = Frame(group)  # valid, and no exchange reads its fields: they need not be kept
+            if size <= SEEN_SIZE:
+                if len(self.seen) >= SEEN_LIMIT:
+                    self.seen.clear()
+                self.seen[payload] = known
         if known.rule is not None:
             return known
         return Frame(group, fields=known.fields if mgid in self.watched else None, src=src, dst=dst)
