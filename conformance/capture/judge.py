@@ -306,8 +306,9 @@ class CaptureJudge:
             out.append(f"the exchanges are followed until the recorded run's robustness phase began, "
                        f"{self.flood - self.origin:.3f} s in (its flood and the node's answers to it are not exchanges)")
         if self.duplicates:
-            out.append(f"{self.duplicates:,} datagrams identical to one shortly before (duplicated by the network) "
-                       "were judged once by the exchange rules")
+            out.append(f"{self.duplicates:,} frames identical to one shortly before were judged once by the exchange "
+                       "rules" if self.log else f"{self.duplicates:,} datagrams identical to one shortly before "
+                       "(duplicated by the network) were judged once by the exchange rules")
         if self.strays:
             out.append(f"{self.strays:,} frames stamped more than {CLOCK_JUMP:g} s from the log's clock (another "
                        "system's clock, or no time) were timed by the log's")
