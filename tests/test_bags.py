@@ -296,11 +296,11 @@ def test_a_bag_for_another_suite_is_one_line(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def small_bags(tmp_path_factory):
     folder = tmp_path_factory.mktemp("bags")
-    return [edition_bag(folder / f"{c}.bag", "seed", compression=c, chunk=200).read_bytes() for c in (None, "BZ2")]
+    return [edition_bag(folder / f"{c}.bag", "seed", compression=c, chunk=200).read_bytes() for c in (None, "BZ2", "LZ4")]
 
 
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(which=st.integers(0, 1), edits=st.lists(st.tuples(st.integers(0, 20_000), st.integers(0, 255)), max_size=8),
+@given(which=st.integers(0, 2), edits=st.lists(st.tuples(st.integers(0, 20_000), st.integers(0, 255)), max_size=8),
        cut=st.integers(0, 6_000))
 def test_a_damaged_bag_is_read_or_refused_never_a_crash(small_bags, which, edits, cut):
     buf = bytearray(small_bags[which])

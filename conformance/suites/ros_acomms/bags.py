@@ -351,7 +351,7 @@ def _decompressed(compression: bytes, data: bytes, size: int, at: int) -> bytes:
         decoder = LZ4FrameDecompressor()
         try:
             out = decoder.decompress(data, size + 1)
-        except RuntimeError as exc:
+        except (RuntimeError, ValueError, OSError) as exc:
             raise Damage(f"the chunk at byte {at:,} is damaged lz4 data ({exc})") from None
         whole = decoder.eof
     else:
