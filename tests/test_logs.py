@@ -329,6 +329,17 @@ def test_bytes_that_are_no_frame_are_skipped_to_the_next_frame(log, tmp_path, ca
     assert report(tmp_path / "r.json")["read"].startswith("600 frames read")
 
 
+def test_synchronization_numbers_before_ids_imc_xml_lacks_are_one_stretch(log, tmp_path, capsys):
+    """A megabyte of places where a frame could begin (a synchronization number, then the null id) is one stretch,
+    searched in one pass (searched again from each place, it took minutes)."""
+    at = frame_ends(log)[99]
+    (tmp_path / "Data.lsf").write_bytes(log[:at] + b"\xfe\x54\xff\xff" * (1 << 18) + log[at:])
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    assert code == 2 and f"1 stretch of bytes that are no IMC frame (1,048,576 bytes, the first at byte {at:,})" \
+        in one_line(out)
+    assert report(tmp_path / "r.json")["read"].startswith("600 frames read")
+
+
 @pytest.mark.parametrize("content, message", [
     (b"", "empty, not a log"),
     (b"hello world", "not a log of a format the suites read (LSF, ROS 1 bag): it starts 68656c6c6f20776f"),

@@ -106,16 +106,20 @@ class LsfReader:
 
     def _next_frame(self, buf: bytes, pos: int, n: int, last: bool) -> int:
         """Where the next frame may begin after the damage at ``pos``: a synchronization number followed by an id
-        IMC.xml defines; else the end (of the log, or of the piece but for bytes that may begin a frame)."""
+        IMC.xml defines; else the end (of the log, or of the piece but for bytes that may begin a frame). Each
+        synchronization number is searched for again only past the place rejected: one pass over the bytes, however
+        many of them are numbers followed by ids IMC.xml lacks."""
         at = pos + 1
+        ahead = [buf.find(sync, at) for sync in SYNCS]  # where each is next (-1: nowhere)
         while True:
-            found = [i for i in (buf.find(SYNCS[0], at), buf.find(SYNCS[1], at)) if i >= 0]
+            found = [i for i in ahead if i >= 0]
             if not found:
                 return n if last else max(at, n - LOOK + 1)
             i = min(found)
             if i + 4 > n or buf[i + 2:i + 4] in self.ids[buf[i:i + 2]]:
                 return i
             at = i + 1
+            ahead = [buf.find(sync, at) if j == i else j for sync, j in zip(SYNCS, ahead)]
 
     def _cut(self, rest: bytes, offset: int) -> str:
         """What the end of the log cuts: a frame's header, or a frame of a message (how much of it is there)."""
