@@ -172,6 +172,18 @@ def test_other_types_are_counted_and_left_alone(tmp_path, capsys):
     assert "2 frames of 1 messages the suite does not cover (counted, left alone): std_msgs/String (2)" in doc["notes"]
 
 
+def test_megabytes_of_a_connections_text_are_shortened_in_the_report(tmp_path, capsys):
+    full, _, _ = connection("ros_acomms_msgs/CST", "seed")
+    long_topic, long_line = "/t" + "x" * 1_000_000, "int8 " + "y" * 1_000_000 + "!\n"
+    bag = write_bag(tmp_path / "long.bag", [(long_topic, (full, long_line, "0" * 32), b"\x01"),
+                                            ("/u", ("pkg/" + "Z" * 1_000_000, "int8 a\n", "0" * 32), b"\x01")])
+    code, doc, _ = judged(bag, capsys)
+    assert code == 1 and (tmp_path / "long.json").stat().st_size < 20_000
+    detail = doc["details"]["ros_acomms/CST/capture/connection/definition"][1]
+    assert detail.startswith(f"topic {long_topic[:bags.NAMED]}...: its definition text does not read: line 1: 'yyy")
+    assert any(n.endswith(f"pkg/{'Z' * (bags.NAMED - 4)}... (1)") for n in doc["notes"])
+
+
 def test_a_message_the_codec_refuses_fails_with_its_place(tmp_path, capsys):
     bag = write_bag(tmp_path / "short.bag", [("/packet", connection("ros_acomms_msgs/Packet", "seed"), b"\x01\x00")])
     code, doc, _ = judged(bag, capsys)

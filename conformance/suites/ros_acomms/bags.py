@@ -22,6 +22,7 @@ from ...capture.findings import Frame, Finding
 from ...capture.logs import Logged
 from ...capture.streams import Reader, Short
 from ...core.verdicts import Verdict
+from ...files import shorten
 from ...kinds.scenario.passive import PassiveExchanges
 from ...kinds.vector.errors import FrameError
 from . import codec
@@ -35,6 +36,7 @@ CHUNK_LIMIT = 128 << 20  # bytes of a chunk held at once, compressed and decompr
 MD5_CLAUSE = "ros-acomms#ros-1-md5-checksums"
 UNKNOWN = "unknown-definition"  # messages of a connection whose definition no edition has: not judged
 LISTED = 3  # differences named per edition
+NAMED = 120  # characters of a topic or a type's name a report shows (the bag's text: it may be megabytes)
 
 
 class Damage(Exception):
@@ -199,13 +201,13 @@ class _Bag:
         conn = _int(fields, "conn", 4, self.record)
         if conn in self.channels:
             return
-        topic = _text(fields.get("topic", b""))
+        topic = shorten(_text(fields.get("topic", b"")), NAMED)
         described = _fields(data, self.record)
         full, md5sum = _text(described.get("type", b"")), _text(described.get("md5sum", b""))
         definition = _text(described.get("message_definition", b""))
         known = self.reader.suite.defs.by_full.get(full)
         if known is None or known.auxiliary:
-            self.channels[conn] = _Channel(None, full, None, "", {})
+            self.channels[conn] = _Channel(None, shorten(full, NAMED), None, "", {})
             return
         findings, view, why = self._judged(known.name, full, md5sum, definition, f"connection {conn}", topic)
         self.channels[conn] = _Channel(known.name, full, view, why, self.reader.clauses)
@@ -223,9 +225,10 @@ class _Bag:
             parsed = parse_full_text(definition, full)
             own = text_md5(parsed, full)
         except DefinitionError as exc:
+            why = shorten(str(exc))
             self._recorded("no edition (a definition that does not read)", topic)
-            return [finding("definition", Verdict.FAIL, f"its definition text does not read: {exc}")], None, \
-                f"its connection's definition does not read ({exc})"
+            return [finding("definition", Verdict.FAIL, f"its definition text does not read: {why}")], None, \
+                f"its connection's definition does not read ({why})"
         out = [finding("md5", Verdict.PASS if own == md5sum else Verdict.FAIL, "" if own == md5sum else
                        f"its header says md5sum {md5sum[:40]!r}, the MD5 of its own definition is {own}", MD5_CLAUSE)]
         differs = {}
@@ -240,12 +243,11 @@ class _Bag:
         problem = None
         if not matches:
             problem = "its definition is that of no edition: " + "; ".join(
-                f"edition {e}: " + ", ".join(d[:LISTED]) + (f" (and {len(d) - LISTED} more)" if len(d) > LISTED else "")
-                for e, d in differs.items())
+                f"edition {e}: {_first(d)}" for e, d in differs.items())
         elif judged is not None and judged not in matches:
             d = differs.get(judged)
             problem = (f"recorded with the definition of edition {' and '.join(matches)}, not {judged}'s" +
-                       (f": {', '.join(d[:LISTED])}" if d else f" (edition {judged} has no {group})"))
+                       (f": {_first(d)}" if d else f" (edition {judged} has no {group})"))
         elif judged is None and not common:
             problem = (f"recorded with the definition of edition {' and '.join(matches)}, where {first} was "
                        f"recorded with {' and '.join(sorted(before)) or 'no edition'}'s: ROS 1 refuses to connect the "
@@ -325,6 +327,12 @@ def _field(fields: dict, name: str, size: int, at: int) -> bytes:
 
 def _int(fields: dict, name: str, size: int, at: int) -> int:
     return int.from_bytes(_field(fields, name, size, at), "little")
+
+
+def _first(differences: list[str]) -> str:
+    """The first LISTED differences, each shortened (a definition's line may be megabytes), and how many more."""
+    more = len(differences) - LISTED
+    return ", ".join(shorten(d) for d in differences[:LISTED]) + (f" (and {more} more)" if more > 0 else "")
 
 
 def _text(raw: bytes) -> str:
