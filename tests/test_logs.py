@@ -3,7 +3,7 @@ exchanges and filters as for captures, and hostile logs (cut at every kind of bo
 decompression bomb, garbage after a stream, a frame claiming more than the file holds), each answered in one line
 within bounded memory and time, never a traceback.
 
-``tests/data/dune-log/Data.lsf.gz`` is the first five gzip members of the log DUNE's Logging task wrote as
+``tests/data/dune-log/Data.lsf.gz`` is the first six gzip members of the log DUNE's Logging task wrote as
 lauv-simulator-1 during ``make dune-record`` (DUNE from the imcpy 1.1.2 sdist, 2026-11-26): DUNE's own bytes. Its
 IMC.xml.gz (LSTS's) is not kept: the same IMC 5.4.30, from the imcpy sdist, is written beside it at test time."""
 
