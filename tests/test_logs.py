@@ -108,6 +108,29 @@ def test_dunes_log_is_judged_message_by_message_with_the_xml_beside_it(dune_fold
     assert doc["counts"]["imc/EstimatedState/capture/frame/valid"] == {"PASS": "254 frames (frames 1075 to 14592)"}
 
 
+def test_a_recording_keeps_only_the_log_folders_dune_names_under_its_home(tmp_path, monkeypatch):
+    """``dune record`` moves the logs DUNE's console says it started; DUNE is under test: a folder outside its home,
+    or a name that is no date/time (a path that climbs), is left where it is."""
+    from imc_conformance.suites.imc.dune.conformance import _keep_logs
+
+    monkeypatch.setenv("IMC_CONFORMANCE_CACHE", str(tmp_path / "cache"))
+    logs, elsewhere = tmp_path / "cache" / "dune" / "build" / "log" / "lauv", tmp_path / "elsewhere"
+    victim = logs.parent.parent / "victim"  # where a climbing name points (and its target, inside tmp_path too)
+    for folder in (logs / "20261126" / "190755", elsewhere / "20261126" / "190756", victim):
+        folder.mkdir(parents=True)
+    console = tmp_path / "vehicle.log"
+    console.write_text(f"- MSG [Daemon] >> log folder: '{logs}'\n"
+                       "- MSG [Transports.Logging] >> log started '20261126/190755'\n"
+                       "- MSG [Transports.Logging] >> log started '../../victim'\n"
+                       f"- MSG [Daemon] >> log folder: '{elsewhere}'\n"
+                       "- MSG [Transports.Logging] >> log started '20261126/190756'\n")
+    out = tmp_path / "reports" / "dune" / "out"
+    assert _keep_logs(console, out) == [out / "20261126" / "190755"]
+    assert (out / "20261126" / "190755").is_dir() and (elsewhere / "20261126" / "190756").is_dir()
+    assert victim.is_dir() and not (tmp_path / "reports" / "victim").exists()
+    assert _keep_logs(tmp_path / "absent.log", out) == []
+
+
 def test_without_its_xml_the_suites_definitions_judge_it(dune_folder, tmp_path, capsys):
     shutil.copy(dune_folder / "Data.lsf.gz", tmp_path / "Data.lsf.gz")
     code, out = run(tmp_path / "Data.lsf.gz", "--json", tmp_path / "r.json", capsys=capsys)

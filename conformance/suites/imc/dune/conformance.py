@@ -314,17 +314,25 @@ def record(argv: list[str]) -> int:
     return 0 if received and kept else 1
 
 
-LOG_LINES = re.compile(r">> log (?:folder: '(?P<folder>[^']+)'|started '(?P<started>[^']+)')")
+LOG_LINES = re.compile(r">> log (?:folder: '(?P<folder>[^']+)'|started '(?P<started>\d{8}/\d{6}(?:_[\w.-]+)?)')")
+CONSOLE_LIMIT = 16 << 20  # bytes of DUNE's console output read for the lines naming its logs (they come first)
 
 
 def _keep_logs(console: Path, out: Path) -> list[Path]:
-    """Move the log folders a DUNE process says it started (in its console output) into ``out``; the folders."""
+    """Move the log folders a DUNE process says it started (in its console output) into ``out``; the folders. DUNE
+    is under test: only a folder under its own home, named as its Logging task names them (date/time), is moved."""
     kept, folder = [], None
-    for line in console.read_text(errors="replace").splitlines() if console.exists() else ():
+    try:
+        with open(console, "rb") as handle:
+            text = handle.read(CONSOLE_LIMIT).decode(errors="replace")
+    except OSError:
+        return kept
+    for line in text.splitlines():
         found = LOG_LINES.search(line)
         if found and found["folder"]:
-            folder = Path(found["folder"])
-        elif found and folder is not None and (folder / found["started"]).is_dir():
+            folder = Path(found["folder"]).resolve()
+            folder = folder if folder.is_relative_to(home().resolve()) else None
+        elif found and found["started"] and folder is not None and (folder / found["started"]).is_dir():
             target = out / found["started"]
             shutil.rmtree(target, ignore_errors=True)
             target.parent.mkdir(parents=True, exist_ok=True)
