@@ -58,8 +58,11 @@ dune-conformance: dune
 	$(VENV)/bin/python -m imc_conformance.suites.imc.dune conformance
 
 # DUNE's own traffic for a minute (every message lauv-simulator-1 transports), recorded in its namespace, then judged
-# message by message with the whole protocol. Never in CI.
+# message by message with the whole protocol; and the mission log DUNE wrote meanwhile, judged with the IMC.xml
+# beside it. Never in CI.
 dune-record: dune
-	$(VENV)/bin/python -m imc_conformance.suites.imc.dune record --seconds 60 --out reports/dune-whole.pcap
-	$(VENV)/bin/imc-conformance pcap reports/dune-whole.pcap --suite imc-full --json reports/dune-whole.json --html reports/dune-whole.html
+	rm -rf reports/dune-log
+	$(VENV)/bin/python -m imc_conformance.suites.imc.dune record --seconds 60 --out reports/dune-whole.pcap --log-out reports/dune-log
+	-$(VENV)/bin/imc-conformance pcap reports/dune-whole.pcap --suite imc-full --json reports/dune-whole.json --html reports/dune-whole.html
+	$(VENV)/bin/imc-conformance log reports/dune-log/*/*/Data.lsf.gz --json reports/dune-log.json --html reports/dune-log.html
 

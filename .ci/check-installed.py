@@ -1,9 +1,10 @@
 """Run both suites from an installed wheel, in a folder outside the checkout, and check what they find.
 
 Usage: python check-installed.py BIN_DIR CAPTURE — BIN_DIR holds the installed ``imc-conformance``; CAPTURE is a
-recording to judge (tests/data/dune-seed.pcapng). Every failure of the real implementations must be a documented
-erratum, every case the corpus lists must be run, the reference node must pass over loopback, and the capture must
-be read. Exits 1 with the reasons otherwise.
+recording to judge (tests/data/dune-seed.pcapng; DUNE's mission log beside it, dune-log/Data.lsf.gz, is judged too).
+Every failure of the real implementations must be a documented erratum, every case the corpus lists must be run, the
+reference node must pass over loopback, and the capture and the log must be read. Exits 1 with the reasons
+otherwise.
 """
 
 from __future__ import annotations
@@ -65,6 +66,10 @@ with tempfile.TemporaryDirectory() as folder:
     report = here / "capture.json"
     run("pcap", str(CAPTURE), "--json", str(report), ok=(0, 1))
     judged(report, f"the capture {CAPTURE.name} (DUNE's own failures in it)", explained=False)
+    log = CAPTURE.parent / "dune-log" / "Data.lsf.gz"  # DUNE's own mission log: every frame valid
+    report = here / "log.json"
+    run("log", str(log), "--json", str(report))
+    judged(report, f"DUNE's mission log {log.parent.name}/{log.name}")
     report = here / "fuzz.json"  # a library adapter in its worker process, from the wheel: every finding explained
     run("fuzz", "--adapter", "imcpy", "--adapter", "pyimclsts", "--message", "LblRange", "--budget", "40",
         "--json", str(report))

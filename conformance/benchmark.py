@@ -19,6 +19,10 @@ target with ``met`` or ``MISSED`` and the figure measured before the start-up wo
 - the whole protocol (issue 22): ``generate --from`` the IMC.xml imcpy ships, the ``imc-full`` folder built on
   first use, ``list`` of one of its messages, and ``run --suite imc-full --adapter imcpy`` per case beside the seed
   suite's (whole processes);
+- mission logs (issue 35): ``imc-conformance log`` on an LSF log grown from DUNE's recorded log (the excerpt in
+  ``tests/data/dune-log``, its frames again and again with later timestamps, judged with the IMC.xml beside it),
+  uncompressed and gzip (whole command), and the peak memory of the whole command on a ~1 GB log beside a ~100 MB
+  one (the logs are written into a temporary folder and removed);
 - fuzzing (once each): generated messages against imcpy through hypothesis, the frame-mutation sweep against imcpy
   (beside imcpy's bare decode of such frames), the differential run of imcpy and pyimclsts (1,000 examples per
   message, whole process) and the mutants of both suites.
@@ -64,6 +68,9 @@ TARGETS = (
     ("subprocess, imcpy shim, batched", "subprocess", "cases/s", 15_000, 7_579),
     ("subprocess, imcpy shim, one request per line", "subprocess per line", "cases/s", 8_000, 7_579),
     ("capture judged, whole command", "capture", "frames/s", 150_000, 61_614),
+    ("uncompressed LSF log judged, whole command", "log", "frames/s", 100_000, None),
+    ("gzip LSF log vs the same log uncompressed, whole command", "log gzip ratio", "x", 1.5, None),
+    ("peak memory judging a ~1 GB LSF log vs a ~100 MB one, whole command", "log memory ratio", "x", 1.25, None),
     ("slowest broken node vs the reference node, scenario set (protocol time)", "live ratio", "x", 2.0, 46.9),
     ("fuzz: generated round-trips against imcpy in-process, through hypothesis", "fuzz hypothesis", "examples/s", 500,
      None),
@@ -446,6 +453,76 @@ def capture_rows(suite, repeat: int) -> dict[str, float]:
     return out
 
 
+LOG_FRAMES = 1_000_000
+LOG_SIZES = (("100 MB", 100 << 20), ("1 GB", 1 << 30))  # logs whose peak memory is compared
+LOG_EXCERPT = Path(__file__).resolve().parents[1] / "tests" / "data" / "dune-log" / "Data.lsf.gz"
+
+
+# Runs a command and says its resources: measured from a small process, since a child forked from this one counts the
+# benchmark's own memory as its peak until it runs the command.
+MEASURE = ("import resource, subprocess, sys; code = subprocess.call(sys.argv[1:], stdout=subprocess.DEVNULL, "
+           "stderr=subprocess.DEVNULL); use = resource.getrusage(resource.RUSAGE_CHILDREN); "
+           "print(use.ru_utime + use.ru_stime, use.ru_maxrss, code)")
+
+
+def measured(argv: list[str]) -> tuple[float, float, int]:
+    """(seconds, CPU seconds, peak resident memory in bytes) of one whole command (exit code 0 or 1 expected): the CPU
+    time shows what contention with other work on the machine hides in the seconds."""
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-c", MEASURE, sys.executable, "-m", "imc_conformance.cli", *argv],
+                          capture_output=True, text=True, env=command_env(), cwd=tempfile.gettempdir())
+    took = time.perf_counter() - start
+    cpu, peak, code = done.stdout.split()
+    if int(code) not in (0, 1):
+        raise SystemExit(f"imc-conformance {' '.join(argv)} failed ({code})")
+    return took, float(cpu), int(peak) * 1024
+
+
+def log_rows(repeat: int) -> dict[str, float]:
+    """``imc-conformance log`` on LSF logs grown from DUNE's recorded log (with the IMC.xml beside them): a million
+    frames uncompressed and gzip (whole command), and the peak memory on ~100 MB and ~1 GB logs."""
+    import gzip
+
+    from .suites.imc.imc_xml import fetch_imc_xml
+    from .suites.imc.traffic import grow_log
+
+    if not LOG_EXCERPT.exists():
+        print(f"logs: no recorded log at {LOG_EXCERPT} (run from a checkout): skipped")
+        return {}
+    recorded = gzip.decompress(LOG_EXCERPT.read_bytes())
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="imc-conformance-logs-") as folder:
+        folder = Path(folder)
+        (folder / "gz").mkdir()
+        for where in (folder, folder / "gz"):
+            (where / "IMC.xml.gz").write_bytes(gzip.compress(fetch_imc_xml().read_bytes()))
+        once = grow_log(recorded, folder / "Data.lsf", 1)  # the recording once: its frames
+        made = grow_log(recorded, folder / "Data.lsf", LOG_FRAMES * once["bytes"] // once["frames"])
+        with open(folder / "Data.lsf", "rb") as plain, gzip.open(folder / "gz" / "Data.lsf.gz", "wb") as packed:
+            while piece := plain.read(1 << 20):
+                packed.write(piece)
+        COUNTS["log"] = made["frames"]
+        for row, path in (("log", folder / "Data.lsf"), ("log gzip", folder / "gz" / "Data.lsf.gz")):
+            runs = [measured(["log", str(path)]) for _ in range(repeat)]
+            out[row], out[f"{row} cpu"] = statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs)
+        out["log gzip ratio"] = out["log gzip"] / out["log"]
+        sizes = {}
+        for label, size in LOG_SIZES:
+            (folder / "Data.lsf").unlink()
+            grown = grow_log(recorded, folder / "Data.lsf", size)
+            out[f"log {label} seconds"], _, sizes[label] = measured(["log", str(folder / "Data.lsf")])
+            COUNTS[f"log {label}"] = grown["frames"]
+        out["log memory ratio"] = sizes["1 GB"] / sizes["100 MB"]
+    n = COUNTS["log"]
+    print(f"logs: {n:,} frames of DUNE's log ({made['bytes'] / 1e6:.0f} MB): uncompressed {out['log']:.2f} s "
+          f"({n / out['log']:,.0f} frames/s; CPU {out['log cpu']:.2f} s, {n / out['log cpu']:,.0f} frames/s), gzip "
+          f"{out['log gzip']:.2f} s ({out['log gzip ratio']:.2f}x; CPU {out['log gzip cpu']:.2f} s, "
+          f"{out['log gzip cpu'] / out['log cpu']:.2f}x); peak memory {sizes['100 MB'] / 2**20:.0f} MB for 100 MB "
+          f"({COUNTS['log 100 MB']:,} frames, {out['log 100 MB seconds']:.0f} s), {sizes['1 GB'] / 2**20:.0f} MB for "
+          f"1 GB ({COUNTS['log 1 GB']:,} frames, {out['log 1 GB seconds']:.0f} s): {out['log memory ratio']:.2f}x")
+    return out
+
+
 def fuzz_rows(suite, everything) -> dict[str, float]:
     """The fuzzer's throughput (once each: hypothesis's search is sequential and seeded) and the mutants' time."""
     import imcpy
@@ -539,7 +616,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--json", metavar="FILE", help="also write every median and target as JSON")
-    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "fuzz", "whole"):
+    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole"):
         parser.add_argument(f"--skip-{part}", action="store_true")
     args = parser.parse_args(argv)
 
@@ -559,6 +636,8 @@ def main(argv: list[str] | None = None) -> int:
         medians |= live_rows(suite, everything, args.repeat, not args.skip_robustness)
     if not args.skip_capture:
         medians |= capture_rows(suite, min(args.repeat, 3))
+    if not args.skip_logs:
+        medians |= log_rows(min(args.repeat, 3))
     if not args.skip_fuzz:
         medians |= fuzz_rows(suite, everything)
     if not args.skip_whole:

@@ -28,8 +28,9 @@ class Frame:
 
 @dataclass(slots=True)
 class Finding:
-    """One judged thing, filed as case ``<suite>/<group>/capture/<case>``: a frame, or an exchange's aspect.
-    ``number`` and ``time`` place it in the capture; ``frame`` holds a failing frame's bytes."""
+    """One judged thing, filed as case ``<suite>/<group>/capture/<case>``: a frame, an exchange's aspect, or what a
+    log says of its frames (a connection's definition). ``number`` and ``time`` place it in the capture; ``frame``
+    holds a failing frame's bytes."""
 
     group: str
     case: str
@@ -39,7 +40,8 @@ class Finding:
     number: int | None = None
     time: float | None = None
     frame: bytes | None = None
-    where: object = ""  # the datagram it rests on (judge.py formats its addresses)
+    where: object = ""  # the datagram or logged frame it rests on (judge.py says where it is), or a text
+    label: str | None = None  # what the report lists it as, where it is no frame (``connection 3``)
 
 
 @dataclass(slots=True)
@@ -60,6 +62,7 @@ class CaptureRules(Protocol):
 
     ports: frozenset[int]
     keys: dict[str, str]  # the groups frames are filed under, in report order, with the suite's key for each
+    outside: str  # what is judged of a frame of a message the suite does not cover ("framing checked only")
 
     def frame(self, payload: bytes) -> Frame | None:
         """The frame in a datagram's payload, judged; None when the payload is not the suite's at all."""

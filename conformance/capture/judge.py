@@ -13,11 +13,15 @@ from ..core.results import CaseResult, CheckResult, MessageResult, RunResult, me
 from ..core.verdicts import Verdict, worst
 from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched
+from .logs import Logged
 from .recording import OWN, RECEIVED
 from .records import Record
 
 FRAME_CLAUSE = "the byte rules of the suite's corpus (rules.json)"
 RECENT = 256  # watched frames remembered to recognise a datagram the network duplicated
+CLOCK_JUMP = 10.0  # seconds a log's clock may jump ahead before the exchanges open across the jump go unjudged
+CLOCK_CONFIRM = 100  # frames in a row that move a log's clock ahead by more (a running clock, not a burst)
+MAX_TIME = 1e11  # seconds since the epoch: a logged frame's timestamp beyond (or not a number) is no time
 
 
 @dataclass
@@ -46,7 +50,7 @@ class _Tally:
 
 
 class CaptureJudge:
-    def __init__(self, suite_name: str, rules: CaptureRules, edition: str, selection: Selection):
+    def __init__(self, suite_name: str, rules: CaptureRules, edition: str, selection: Selection, log: bool = False):
         self.suite, self.rules, self.edition, self.selection = suite_name, rules, edition, selection
         self.ports = selection.ports or rules.ports
         self.dissector = Dissector()
@@ -73,7 +77,12 @@ class CaptureJudge:
         self.groups = selection.groups
         self.filtered = any(v is not None for v in (selection.src, selection.dst, selection.host, selection.start,
                                                     selection.end))
+        self.plain = not self.filtered and not self.groups  # nothing narrows the frames judged
         self.lost = 0  # datagrams the watcher lost before it could read them (the kernel dropped them)
+        self.log = log  # the frames come from logs (``logged``), not from datagrams
+        self.jumps = 0  # times a log's clock jumped ahead by more than CLOCK_JUMP
+        self.strays = 0  # logged frames stamped too far from the log's clock to move it, timed by it
+        self.ahead: list | None = None  # frames in a row ahead of the clock: [first time, latest time, how many]
 
     def losses(self, start: float, end: float, count: int) -> None:
         """``count`` datagrams were lost between ``start`` and ``end`` (a live watcher's receive buffer)."""
@@ -103,11 +112,58 @@ class CaptureJudge:
         if t > self.last:
             self.last = t
 
-    def _judge_datagram(self, got: Datagram, source: str = "") -> None:
-        """Judge one UDP datagram of a record (``feed``) or of a socket (``received``)."""
+    def logged(self, got: Logged, source: str = "") -> None:
+        """Judge one frame of a log (``source`` names its file when there are several). A log records no time of
+        reception: its frames are timed by their own timestamps on the log's clock, which never goes back. A frame
+        stamped more than CLOCK_JUMP seconds from it (another system's clock, a frame with no time, a burst of
+        frames stamped alike) is timed by the clock. Only a running clock moves it ahead by more: CLOCK_CONFIRM
+        frames in a row, each within CLOCK_JUMP of the one before, over a second at least (a gap in the log, or its
+        clock set); an exchange open across such a jump is not judged on its bound (INCONCLUSIVE)."""
+        t, last = got.time, self.last
+        if self.origin is None:
+            t = got.time = self.origin = self.last = t if -MAX_TIME < t < MAX_TIME else 0.0
+        elif not last - CLOCK_JUMP < t < last + CLOCK_JUMP:
+            ahead = self.ahead
+            if not last + CLOCK_JUMP <= t < MAX_TIME:
+                pass  # behind the clock, or no time
+            elif ahead is None or not -CLOCK_JUMP < t - ahead[1] < CLOCK_JUMP:
+                self.ahead = [t, t, 1]  # from, latest, frames: a clock ahead, perhaps
+            else:
+                ahead[1], ahead[2] = t, ahead[2] + 1
+                if ahead[2] >= CLOCK_CONFIRM and ahead[1] - ahead[0] >= 1.0:
+                    self.jumps += 1
+                    self.tracker.lost(last, t, "the log's clock jumped meanwhile")
+                    self.last, self.ahead, last = t, None, t
+            if t != last:
+                self.strays += 1
+                t = got.time = last
+        else:
+            self.ahead = None
+            if t > last:
+                self.last = t
+        self.records += 1
+        if source is not self.source or not self.sources:
+            self._from(source)
+        if self.filtered and not self._in(got, frames=False):
+            self.skipped["outside the selection"] += 1
+            return
+        self._judge_unit(got, False, got.channel)
+
+    def found(self, f: Finding, source: str = "") -> None:
+        """Tally what a log says of its frames (a bag connection's definition), as it is found."""
+        self._from(source)
+        if not self.groups or f.group in self.groups:
+            self._tally(f)
+
+    def _from(self, source: str) -> None:
+        """Note that what follows comes from the file ``source`` names (several files judged at once)."""
         if source != self.source or not self.sources:
             self.source = source
             self.sources.add(source)
+
+    def _judge_datagram(self, got: Datagram, source: str = "") -> None:
+        """Judge one UDP datagram of a record (``feed``) or of a socket (``received``)."""
+        self._from(source)
         recorded = got.comment is not None and self.keep_commented  # a datagram of a recorded run: on its ports
         # what a recorded run's robustness phase sent on purpose (corpus frames, garbage, probes): its frames are
         # not the node's to judge, but the node answers its requests
@@ -123,7 +179,20 @@ class CaptureJudge:
         if self.filtered and not self._in(got, frames=False):  # outside the window or the host: unseen
             self.skipped["outside the selection"] += 1
             return
-        frame = self.rules.frame(got.payload)
+        self._judge_unit(got, deliberate)
+
+    def _judge_unit(self, got: Datagram | Logged, deliberate: bool, channel=None) -> None:
+        """Judge the frame a datagram or a log holds (``channel``: what judges a logged frame that does not name its
+        message), and follow the exchanges through it."""
+        frame = self.rules.frame(got.payload) if channel is None else channel.frame(got.payload)
+        if self.plain and frame is not None and frame.rule is None and frame.fields is None and not deliberate \
+                and not got.cut and not self.corpus_limit:
+            valid = self.valid.get(frame.group)  # the common case: a valid frame no exchange, filter or corpus needs
+            if valid is not None:
+                self.datagrams += 1
+                valid[0] += 1
+                valid[2] = got.number
+                return
         if deliberate:
             self.skipped["datagrams the session sent on purpose in its robustness phase"] += 1
         elif frame is None:
@@ -155,7 +224,7 @@ class CaptureJudge:
                 if not self.groups or finding.group in self.groups:
                     self._tally(finding)
 
-    def _judge_frame(self, group: str, frame, got: Datagram) -> None:
+    def _judge_frame(self, group: str, frame, got: Datagram | Logged) -> None:
         """Tally a frame's verdict (and keep it for the corpus an adapter decodes)."""
         self.datagrams += 1
         if self.corpus_limit and not got.cut and got.payload not in self.corpus:
@@ -217,14 +286,18 @@ class CaptureJudge:
         return sorted(by_group.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0]))
 
     def notes(self) -> list[str]:
-        out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged"
-               + (f", from {_when(self.origin)} for {self.last - self.origin:.3f} s" if self.origin else "")]
+        span = f", from {_when(self.origin)} for {self.last - self.origin:.3f} s" if self.origin else ""
+        if self.log:
+            out = [f"{self.records:,} frames read, {self.datagrams:,} judged{span}"]
+        else:
+            out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged{span}"]
         if self.outside:
             top = ", ".join(f"{name} ({n:,})" for name, n in self.outside.most_common(8))
             out.append(f"{sum(self.outside.values()):,} frames of {len(self.outside)} messages the suite does not "
-                       f"cover (framing checked only): {top}{' ...' if len(self.outside) > 8 else ''}")
+                       f"cover ({self.rules.outside}): {top}{' ...' if len(self.outside) > 8 else ''}")
         if not self.tallies and not self.valid:
-            out.append("no frame of the suite was judged: none on the ports (--port names others) or in the selection")
+            out.append("no frame of the suite was judged: none in the selection" if self.log else
+                       "no frame of the suite was judged: none on the ports (--port names others) or in the selection")
         out += [f"{n:,} not judged: {why}" for why, n in self.skipped.most_common()]
         if self.lost:
             out.append(f"{self.lost:,} datagrams were dropped by the kernel before they could be read (a flood, or a "
@@ -233,8 +306,15 @@ class CaptureJudge:
             out.append(f"the exchanges are followed until the recorded run's robustness phase began, "
                        f"{self.flood - self.origin:.3f} s in (its flood and the node's answers to it are not exchanges)")
         if self.duplicates:
-            out.append(f"{self.duplicates:,} datagrams identical to one shortly before (duplicated by the network) "
-                       "were judged once by the exchange rules")
+            out.append(f"{self.duplicates:,} frames identical to one shortly before were judged once by the exchange "
+                       "rules" if self.log else f"{self.duplicates:,} datagrams identical to one shortly before "
+                       "(duplicated by the network) were judged once by the exchange rules")
+        if self.strays:
+            out.append(f"{self.strays:,} frames stamped more than {CLOCK_JUMP:g} s from the log's clock (another "
+                       "system's clock, or no time) were timed by the log's")
+        if self.jumps:
+            out.append(f"the log's clock jumped ahead {self.jumps:,} times by more than {CLOCK_JUMP:g} s (a gap in the "
+                       "log, or its clock set): an exchange open across a jump is INCONCLUSIVE")
         if self.dissector.held or self.dissector.given_up:
             out.append(f"{len(self.dissector.held) + self.dissector.given_up:,} IP datagrams never reassembled "
                        "(fragments missing from the capture)")
@@ -256,14 +336,15 @@ class CaptureJudge:
             tally.clause = f.clause
 
     def _case(self, group: str, case: str, tally: _Tally) -> CaseResult:
-        noun = "frame" if case.startswith("frame/") else "exchange"
+        noun = case.split("/", 1)[0]  # frame, exchange, connection
         checks = [CheckResult("count", verdict, f"{n:,} {noun}{'s' if n != 1 else ''}" + (
             f" (frames {tally.first} to {tally.last})" if verdict is Verdict.PASS and tally.first
             and len(self.sources) == 1 else ""))
                   for verdict, n in sorted(tally.counts.items(), key=lambda kv: kv[0].value)]
         for f in tally.listed:
-            at = f"{f.time - self.origin:.6f} s" if f.time is not None and self.origin is not None else "-"
-            checks.append(CheckResult(f"frame {f.number}", f.verdict, f"at {at}, {f.where}: {f.detail}".rstrip(": "),
+            at = f"at {f.time - self.origin:.6f} s, " if f.time is not None and self.origin is not None else \
+                "" if f.label else "at -, "
+            checks.append(CheckResult(f.label or f"frame {f.number}", f.verdict, f"{at}{f.where}: {f.detail}".rstrip(": "),
                                       actual=f.frame[:512].hex() if f.frame is not None else None, clause=f.clause))
         bad = sum(n for v, n in tally.counts.items() if v is not Verdict.PASS)
         if bad > len(tally.listed):
@@ -273,14 +354,16 @@ class CaptureJudge:
         return CaseResult(f"{self.suite}/{group}/capture/{case}", group, worst(tally.counts), None, tally.clause,
                           checks, rule)
 
-    def _in(self, d: Datagram, frames: bool) -> bool:
-        """Whether a datagram is within the window and from or to the host (and, for ``frames``, from --src and
-        to --dst, where those are addresses)."""
+    def _in(self, d: Datagram | Logged, frames: bool) -> bool:
+        """Whether a datagram or a logged frame is within the window, and a datagram from or to the host (and, for
+        ``frames``, from --src and to --dst, where those are addresses: a log has none)."""
         s = self.selection
         if s.start is not None and self.origin is not None and d.time - self.origin < s.start:
             return False
         if s.end is not None and self.origin is not None and d.time - self.origin > s.end:
             return False
+        if d.__class__ is Logged:
+            return True
         wanted = ((s.host, (d.src, d.dst)),) + (((s.src, (d.src,)), (s.dst, (d.dst,))) if frames else ())
         return all(not isinstance(want, str) or want in have for want, have in wanted)
 
@@ -291,8 +374,12 @@ class CaptureJudge:
         return all(not isinstance(want, int) or want in have for want, have in wanted)
 
 
-def _place(d: Datagram, source: str) -> str:
-    """Where a datagram went: ``[file ]src:port → dst:port``."""
+def _place(d: Datagram | Logged | str, source: str) -> str:
+    """Where a datagram went (``[file ]src:port → dst:port``), where a logged frame is, or what a log's own text says."""
+    if isinstance(d, str):
+        return f"{source}{d}"
+    if d.__class__ is Logged:
+        return d.place(source)
     host = lambda a: f"[{a}]" if ":" in a else a  # noqa: E731
     return f"{source}{host(d.src)}:{d.sport} → {host(d.dst)}:{d.dport}"
 

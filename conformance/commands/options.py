@@ -14,10 +14,13 @@ DEFAULT_MEMORY_MB = 2048
 
 # ---------------------------------------------------------------- option groups
 
-def add_suite(parser) -> None:
-    parser.add_argument("--suite", default=suite_names()[0], choices=suite_names(),
-                        help="imc (default): IMC messages 150-216; ros_acomms: ros_acomms_msgs types; "
-                             + "; ".join(f"{name}: {text}" for name, (_, text) in suite_variants().items()))
+def add_suite(parser, by_format: bool = False) -> None:
+    """--suite; ``by_format``: its default is the suite whose format the input is (a log's)."""
+    parser.add_argument("--suite", default=None if by_format else suite_names()[0], choices=suite_names(),
+                        help=("default: the suite reading the first log's format (LSF: imc, a ROS 1 bag: ros_acomms); "
+                              "imc: " if by_format else "imc (default): ")
+                        + "IMC messages 150-216; ros_acomms: ros_acomms_msgs types; "
+                        + "; ".join(f"{name}: {text}" for name, (_, text) in suite_variants().items()))
 
 
 def add_selection(parser) -> None:
@@ -94,14 +97,17 @@ def add_target(live, what: str) -> None:
                            "lets the robustness phase bisect to the frame that silenced it")
 
 
-def add_judging(parser) -> None:
-    """The options pcap and watch share: what to judge against, which frames, how to report."""
-    add_suite(parser)
+def add_judging(parser, log: bool = False) -> None:
+    """The options pcap, watch and log share: what to judge against, which frames, how to report (``log``: a log's,
+    whose format chooses the suite and which has no UDP ports)."""
+    add_suite(parser, by_format=log)
     parser.add_argument("--vectors", type=Path, metavar="DIR",
                         help="a suite folder whose definitions to judge with (e.g. one made by generate --from)")
     parser.add_argument("--edition", help="the edition to judge against (default: the suite's first)")
-    parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
-                        help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, 30100-30104)")
+    if not log:
+        parser.add_argument("--port", action="append", type=port, default=[], metavar="PORT",
+                            help="UDP ports carrying the suite's frames (repeatable; default imc: 6001-6030, "
+                                 "30100-30104)")
     parser.add_argument("--message", action="append", default=[], metavar="NAME", help="only this message (repeatable)")
     parser.add_argument("--list-frames", type=count, default=20, metavar="N",
                         help="failing frames listed per message and rule (default 20)")

@@ -51,3 +51,18 @@ def write_file(path: Path, text: str, what: str, console) -> int:
         return 1
     console.print(f"{what}: {printable(str(path))}", highlight=False, markup=False)
     return 0
+
+
+def finish(result, targets: dict[str, Path], damage: list[str], complete: bool) -> int:
+    """Show a judged capture or log, write its reports, say what of it could not be read (one line each); the exit
+    code: 2 where a report could not be written or the input is damaged (what was before the damage is judged)."""
+    from ..render.terminal import print_result
+
+    console = terminal()
+    print_result(result, console)
+    problems = write_reports(result, targets, console)
+    for line in damage:
+        print(f"imc-conformance: {printable(line)}", file=sys.stderr)
+    if not complete:
+        return result.exit_code()
+    return 2 if problems or damage else result.exit_code()

@@ -78,8 +78,7 @@ def command(args) -> int:
 
 def judged(args, suite, rules, selection, judge, adapter, targets) -> int:
     """Judge the captures, replay a recorded run, decode the frames through an adapter; report; the exit code."""
-    from ..render.terminal import print_result
-    from .output import terminal, write_reports
+    from .output import finish
     from .provenance import provenance
 
     started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
@@ -106,14 +105,7 @@ def judged(args, suite, rules, selection, judge, adapter, targets) -> int:
             result.notes.append(damage[-1])
     if adapter is not None and complete:
         merge(result, decoded_by(judge, suite, adapter, args), list(rules.keys), args.strict)
-    console = terminal()
-    print_result(result, console)
-    problems = write_reports(result, targets, console)
-    for line in damage:
-        print(f"imc-conformance: {line}", file=sys.stderr)
-    if not complete:
-        return result.exit_code()
-    return 2 if problems or damage else result.exit_code()
+    return finish(result, targets, damage, complete)
 
 
 def judge_file(judge, path: Path, named: bool) -> list[str]:

@@ -128,6 +128,11 @@ class Suite(ABC):
         """What the suite judges in captures (``capture.findings.CaptureRules``); ValueError if it has none."""
         raise ValueError(f"the suite {self.name!r} is not carried in datagrams: it has no captures to judge")
 
+    def log_reader(self, edition: str | None = None):
+        """How the suite reads its mission logs (``capture.logs.LogReader``), judging in ``edition`` (None: the
+        reader's choice); ValueError if it reads none."""
+        raise ValueError(f"the suite {self.name!r} reads no mission logs")
+
     def open_replay(self, link, **settings):
         """A session replaying a recorded run over ``link`` (sessions/replay.py); settings as the run had them:
         ``target``, ``src``, ``dst``, ``startup``, ``first_unique``."""

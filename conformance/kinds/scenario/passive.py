@@ -72,7 +72,7 @@ class PassiveExchanges:
         self.pairs: set[tuple] = set()  # (rule, requester, node) of every request seen
         self.senders: dict = {}  # system id -> the address and port its frames come from
         self.next_deadline = float("inf")
-        self.losses: list[tuple[float, float]] = []  # (from, to): times within which datagrams were lost
+        self.losses: list[tuple[float, float, str]] = []  # (from, to, why): times the frames do not tell all of
 
     @property
     def messages(self) -> set[str]:
@@ -103,9 +103,10 @@ class PassiveExchanges:
         return any(_matches(w.fields, rule.reply_when) and (id(rule), w.dst, w.src) in self.pairs
                    for rule in self.by_reply.get(w.message, ()))
 
-    def lost(self, start: float, end: float) -> None:
-        """Datagrams were lost between ``start`` and ``end`` (a watcher's receive buffer overflowed)."""
-        self.losses.append((start, end))
+    def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile") -> None:
+        """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
+        a log's clock jumped): a request left unanswered across that time is not judged."""
+        self.losses.append((start, end, why))
 
     def finish(self, end: float) -> list[Finding]:
         """Judge what the end of the capture decides; a request whose bound reaches past it is INCONCLUSIVE."""
@@ -236,10 +237,11 @@ class PassiveExchanges:
 
     def _judge_expired(self, o: _Open) -> list[Finding]:
         findings = self._expired(o)
-        if any(start <= o.deadline and end >= o.request.time for start, end in self.losses):
+        why = next((why for start, end, why in self.losses if start <= o.deadline and end >= o.request.time), None)
+        if why is not None:
             for f in findings:  # the reply, or the right one, may have been lost
                 if f.verdict in (Verdict.FAIL, Verdict.NON_STRICT):
-                    f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: datagrams were lost meanwhile"
+                    f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}"
         return findings
 
     def _expired(self, o: _Open) -> list[Finding]:

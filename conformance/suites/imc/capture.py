@@ -10,31 +10,35 @@ from __future__ import annotations
 
 import struct
 
-from .crc16 import crc16 as arc
-
 from ...capture.findings import Frame
 from ...kinds.scenario.passive import PassiveExchanges
 from ...kinds.vector.errors import FrameError, NotJudged
 from . import codec
+from .crc16 import arc  # fastcrc's, called without the wrapper: this is the hot path
 from .definitions import Definitions
 from .wire import NOT_JUDGED_CLAUSE, UNKNOWN_SYSTEM, ImcWire
 
 PORTS = frozenset([*range(6001, 6031), *range(30100, 30105)])  # DUNE's node ports and its discovery ports
 SEEN_LIMIT = 1 << 16  # decoded payloads remembered (repeated statuses and requests decode once)
+SEEN_SIZE = 512  # bytes of a payload remembered at most (the memory stays flat whatever the frames)
 UNIDENTIFIED = "unidentified"  # frames whose message id cannot be read or is the null id
-HEAD = {b"\x54\xfe": struct.Struct("<HHH"), b"\xfe\x54": struct.Struct(">HHH")}
+LITTLE = b"\x54\xfe"
+HEAD = {LITTLE: struct.Struct("<HHH"), b"\xfe\x54": struct.Struct(">HHH")}
 ADDRESSING = {b"\x54\xfe": struct.Struct("<HBH"), b"\xfe\x54": struct.Struct(">HBH")}
 FOOTER = {b"\x54\xfe": struct.Struct("<H"), b"\xfe\x54": struct.Struct(">H")}
+HEADER_SIZE, FOOTER_SIZE = codec.HEADER_SIZE, codec.FOOTER_SIZE
 
 
 class ImcCaptureRules:
     ports = PORTS
+    outside = "framing checked only"
 
     def __init__(self, defs: Definitions, wire: ImcWire, rules: list[dict], behaviour: dict | None):
         self.defs, self.wire, self.behaviour = defs, wire, behaviour
         self.clauses = {r["id"]: r["clause"] for r in rules}
         self.ours = {m.id: m.abbrev for m in defs.suite_messages}
         self.keys = {m.abbrev: str(m.id) for m in defs.suite_messages} | {UNIDENTIFIED: "-"}
+        self.max_payload = defs.max_payload
         self.fixed = {m.id: sum(f.size for f in m.fields) for m in defs.messages if all(f.is_scalar for f in m.fields)}
         self.watched: set[int] = set()
         self.seen: dict[bytes, dict] = {}  # decoded fields by payload, for the watched messages
@@ -50,7 +54,8 @@ class ImcCaptureRules:
         return tracker
 
     def frame(self, p: bytes) -> Frame | None:
-        head = HEAD.get(p[:2])
+        order = p[:2]
+        head = HEAD.get(order)
         if head is None:
             return None  # no IMC synchronization number: not an IMC frame
         n = len(p)
@@ -58,9 +63,13 @@ class ImcCaptureRules:
             return self._decoded(p, UNIDENTIFIED)
         _, mgid, size = head.unpack_from(p)
         group = self.ours.get(mgid)
-        end = codec.HEADER_SIZE + size
-        whole = n >= end + codec.FOOTER_SIZE
-        sound = whole and arc(p[:end]) == FOOTER[p[:2]].unpack_from(p, end)[0]
+        end = HEADER_SIZE + size
+        if n < end + FOOTER_SIZE or size > self.max_payload:
+            sound = False
+        elif n == end + FOOTER_SIZE and order == LITTLE:  # a frame and its little-endian CRC: their CRC is 0
+            sound = not arc(p)
+        else:
+            sound = arc(p[:end]) == FOOTER[order].unpack_from(p, end)[0]
         if group is None:  # a message the suite does not cover: its framing is judged, not its fields
             if not sound or mgid == self.defs.null_id:
                 return self._decoded(p, UNIDENTIFIED)
@@ -68,17 +77,20 @@ class ImcCaptureRules:
             return Frame(None, outside=known.abbrev if known else f"id {mgid}")
         if not sound:
             return self._decoded(p, group)
-        src, _, dst = ADDRESSING[p[:2]].unpack_from(p, 14)
+        src, _, dst = ADDRESSING[order].unpack_from(p, 14)
         fixed = self.fixed.get(mgid)
         if mgid not in self.watched and fixed is not None and size >= fixed:
             return Frame(group, src=src, dst=dst)  # fixed-size fields, all there: valid
-        payload = p[:4] + p[codec.HEADER_SIZE:end]  # what the fields' verdict depends on: byte order, id, payload
+        payload = p[:4] + p[HEADER_SIZE:end]  # what the fields' verdict depends on: byte order, id, payload
         known = self.seen.get(payload)
         if known is None:
             known = self._decoded(p, group)
-            if len(self.seen) >= SEEN_LIMIT:
-                self.seen.clear()
-            self.seen[payload] = known
+            if known.rule is None and mgid not in self.watched:
+                known = Frame(group)  # valid, and no exchange reads its fields: they need not be kept
+            if size <= SEEN_SIZE:
+                if len(self.seen) >= SEEN_LIMIT:
+                    self.seen.clear()
+                self.seen[payload] = known
         if known.rule is not None:
             return known
         return Frame(group, fields=known.fields if mgid in self.watched else None, src=src, dst=dst)

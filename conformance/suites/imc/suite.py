@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib
 import sys
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 from ...core.suite import BuiltinAdapter, Group
@@ -170,6 +170,21 @@ class ImcSuite(DataSuite):
     def capture_rules(self):
         from .capture import ImcCaptureRules
         return ImcCaptureRules(self.defs, self.wire, self.rules, self.behaviour)
+
+    @staticmethod
+    @lru_cache(maxsize=4)
+    def over_xml(raw: bytes) -> ImcSuite:
+        """The IMC suite over the definitions of another IMC.xml (a log's own: every message it defines; the rules,
+        exchanges and clauses of the packaged suite); ValueError (XmlError) naming what it cannot read. One object
+        per XML's bytes."""
+        from .from_xml import xml_document
+
+        defs = parse_definitions(xml_document(raw))
+        return ImcSuite(IMC, defs, title=f"IMC {defs.editions[0][4:]} (the log's IMC.xml)")
+
+    def log_reader(self, edition: str | None = None):
+        from .lsf import LsfReader
+        return LsfReader(self, edition)
 
     def open_target(self, target: str, **settings):
         from .live import open_target

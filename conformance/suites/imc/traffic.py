@@ -89,3 +89,42 @@ def _damage(rng: random.Random, frame: bytes) -> bytes:
     out = bytearray(frame)  # the size field changed
     struct.pack_into("<H", out, 4, (len(frame) - 22 + rng.randrange(1, 40)) % 65536)
     return bytes(out)
+
+
+def write_log(path, defs: Definitions, wire, edition: str, frames: int, start: float = 1.7e9) -> int:
+    """Write the same conversation as an LSF log (frames one after another, as DUNE's Logging task writes them);
+    the frames written."""
+    cache: dict = {}
+    written = k = 0
+    with open(path, "wb") as out:
+        while written < frames:
+            items = conversation(wire, edition, k)[:frames - written]
+            for i, (src, dst, message, fields) in enumerate(items):
+                out.write(_frame(defs, cache, message, fields, src, dst, start + k + i / len(items)))
+            written += len(items)
+            k += 1
+    return written
+
+
+def grow_log(recorded: bytes, path, size: int) -> dict:
+    """Write an LSF log of at least ``size`` bytes made of a recorded log's frames (little-endian, as DUNE writes)
+    again and again, each round later by the recording's span (its timestamps moved, its CRCs redone); what it
+    holds (frames, bytes)."""
+    from .lsf import LsfReader
+    from .suite import load
+
+    frames = [u.payload[:-2] for u in LsfReader(load(), None).units(iter([recorded]), [], "the recording")]
+    times = [struct.unpack_from("<d", f, 6)[0] for f in frames]
+    span = max(times) - min(times) + 1.0
+    written = rounds = 0
+    with open(path, "wb") as out:
+        while written < size:
+            chunk = bytearray()
+            for body, t in zip(frames, times):
+                frame = bytearray(body)
+                struct.pack_into("<d", frame, 6, t + span * rounds)
+                chunk += frame + struct.pack("<H", crc16(frame))
+            out.write(chunk)
+            written += len(chunk)
+            rounds += 1
+    return {"frames": rounds * len(frames), "bytes": written}

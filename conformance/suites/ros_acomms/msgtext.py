@@ -29,12 +29,15 @@ def msg_text(message: Message) -> str:
 
 
 def canonical_text(edition: Edition, message: Message) -> str:
-    lines = [f"{c.type} {c.name}={c.value}" for c in message.definition.constants]
-    for f in message.fields:
-        if f.type.is_builtin:
-            lines.append(f"{f.type.text('')} {f.name}")
-        else:
-            lines.append(f"{md5(edition, edition[f.type.base])} {f.name}")
+    return _canonical(((c.type, c.name, c.value) for c in message.definition.constants),
+                      ((f.type, f.name) for f in message.fields), lambda base: md5(edition, edition[base]))
+
+
+def _canonical(constants, fields, md5_of) -> str:
+    """The text a type's MD5 is taken over: ``constants`` (type, name, value), then ``fields`` (FieldType, name),
+    a nested type's field by ``md5_of(its type)``."""
+    lines = [f"{t} {name}={value}" for t, name, value in constants]
+    lines += [f"{t.text('')} {name}" if t.is_builtin else f"{md5_of(t.base)} {name}" for t, name in fields]
     return "\n".join(lines)
 
 
@@ -111,6 +114,31 @@ def parse_full_text(text: str, full: str) -> dict[str, ParsedType]:
             raise DefinitionError(f"section type {name!r} is not a package/Name")
         out[name] = parse_msg(body, name.split("/")[0])
     return out
+
+
+def text_md5(types: dict[str, ParsedType], full: str) -> str:
+    """The MD5 of type ``full`` as a definition text describes it (``parse_full_text``: it and every type it nests);
+    DefinitionError where it nests a type the text lacks, or itself. Iterative: the text is untrusted input."""
+    done: dict[str, str] = {}
+    stack, begun = [full], set()
+    while stack:
+        name = stack[-1]
+        if name in done:
+            stack.pop()
+            continue
+        parsed = types.get(name)
+        if parsed is None:
+            raise DefinitionError(f"the definition lacks {name}, which {full if name != full else 'it'} nests")
+        missing = [t.base for t, _ in parsed.fields if not t.is_builtin and t.base not in done]
+        if missing:
+            if name in begun:
+                raise DefinitionError(f"{name} nests itself")
+            begun.add(name)
+            stack += missing
+            continue
+        done[name] = hashlib.md5(_canonical(parsed.constants, parsed.fields, done.__getitem__).encode("utf-8")).hexdigest()
+        stack.pop()
+    return done[full]
 
 
 def expected_types(edition: Edition, message: Message) -> dict[str, ParsedType]:

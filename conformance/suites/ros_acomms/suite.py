@@ -166,6 +166,10 @@ class RosSuite(DataSuite):
         return [Mutant(m.name, m.__doc__, lambda m=m: m(edition), getattr(m, "equivalent", None), m in mutants.NEW)
                 for m in mutants.MUTANTS]
 
+    def log_reader(self, edition: str | None = None):
+        from .bags import BagReader
+        return BagReader(self, edition)
+
     def generate(self, check: bool) -> int:
         from .corpus.build import main
         return main(["--check"] if check else [])

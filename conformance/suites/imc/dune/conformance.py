@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -269,13 +270,17 @@ def record(argv: list[str]) -> int:
 
     The vehicle and its peer run as for the scenarios (in a private network namespace), but the vehicle sends DUNE's
     own list of transported messages (lauv-simulator-1's: estimated state, entity states, CPU usage, plans...) to a
-    socket on loopback; everything on the IMC ports is recorded (pcap)."""
+    socket on loopback; everything on the IMC ports is recorded (pcap). The mission log the vehicle's Logging task
+    wrote meanwhile (Data.lsf.gz, with the IMC.xml.gz it was built with) is moved out of DUNE's folder into
+    ``--log-out``."""
     parser = argparse.ArgumentParser(prog="python -m imc_conformance.suites.imc.dune record",
                                      description=record.__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=120.0, help="how long to record (default 120)")
     parser.add_argument("--out", type=Path, default=Path("reports/dune-whole.pcap"), help="the recording to write")
     parser.add_argument("--per-message", type=int, metavar="N",
                         help="keep at most N datagrams of each message (a small recording of every message sent)")
+    parser.add_argument("--log-out", type=Path, default=Path("reports/dune-log"),
+                        help="where to move the vehicle's mission log folders (default reports/dune-log)")
     args = parser.parse_args(argv)
     if not built():
         print("dune record: DUNE is not built here: run `make dune` first", file=sys.stderr)
@@ -306,5 +311,34 @@ def record(argv: list[str]) -> int:
         print("dune record: interrupted", file=sys.stderr)
     finally:
         sink.close()
-    print(f"dune record: {received} datagrams from the vehicle in {args.seconds:g} s")
-    return 0 if received else 1
+    kept = _keep_logs(home() / "run" / "vehicle.log", args.log_out)
+    print(f"dune record: {received} datagrams from the vehicle in {args.seconds:g} s; its mission log: "
+          + (", ".join(str(p) for p in kept) or "none written"))
+    return 0 if received and kept else 1
+
+
+LOG_LINES = re.compile(r">> log (?:folder: '(?P<folder>[^']+)'|started '(?P<started>\d{8}/\d{6}(?:_[\w.-]+)?)')")
+CONSOLE_LIMIT = 16 << 20  # bytes of DUNE's console output read for the lines naming its logs (they come first)
+
+
+def _keep_logs(console: Path, out: Path) -> list[Path]:
+    """Move the log folders a DUNE process says it started (in its console output) into ``out``; the folders. DUNE
+    is under test: only a folder under its own home, named as its Logging task names them (date/time), is moved."""
+    kept, folder = [], None
+    try:
+        with open(console, "rb") as handle:
+            text = handle.read(CONSOLE_LIMIT).decode(errors="replace")
+    except OSError:
+        return kept
+    for line in text.splitlines():
+        found = LOG_LINES.search(line)
+        if found and found["folder"]:
+            folder = Path(found["folder"]).resolve()
+            folder = folder if folder.is_relative_to(home().resolve()) else None
+        elif found and found["started"] and folder is not None and (folder / found["started"]).is_dir():
+            target = out / found["started"]
+            shutil.rmtree(target, ignore_errors=True)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.move(str(folder / found["started"]), target)
+            kept.append(target)
+    return kept

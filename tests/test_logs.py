@@ -1,0 +1,449 @@
+"""Mission logs, IMC's LSF: DUNE's own log judged with the IMC.xml beside it, the same verdicts plain, gzip and bzip2,
+exchanges and filters as for captures, and hostile logs (cut at every kind of boundary, a wrong or missing IMC.xml, a
+decompression bomb, garbage after a stream, a frame claiming more than the file holds), each answered in one line
+within bounded memory and time, never a traceback.
+
+``tests/data/dune-log/Data.lsf.gz`` is the first six gzip members of the log DUNE's Logging task wrote as
+lauv-simulator-1 during ``make dune-record`` (DUNE from the imcpy 1.1.2 sdist, 2026-11-26): DUNE's own bytes. Its
+IMC.xml.gz (LSTS's) is not kept: the same IMC 5.4.30, from the imcpy sdist, is written beside it at test time."""
+
+from __future__ import annotations
+
+import bz2
+import gzip
+import io
+import json
+import random
+import re
+import shutil
+import struct
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from imc_conformance.capture import streams
+from imc_conformance.capture.judge import CaptureJudge, Selection
+from imc_conformance.capture.logs import Logged
+from imc_conformance.cli import main
+from imc_conformance.suites import load_suite
+from imc_conformance.suites.imc import codec
+from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
+from imc_conformance.suites.imc.traffic import write_log
+
+SUITE = load_suite("imc")
+EDITION = "imc-5.4.30"
+EXCERPT = Path(__file__).parent / "data" / "dune-log" / "Data.lsf.gz"
+VEHICLE, STATION = 30, 0x4CF0
+
+
+def run(*argv, capsys):
+    code = main(["log", *map(str, argv)])
+    return code, capsys.readouterr()
+
+
+def report(path: Path) -> dict:
+    """A JSON result with its verdicts and counts by case id, and ``read``: its note on the frames read."""
+    doc = json.loads(path.read_text())
+    doc["read"] = next(n for n in doc["notes"] if " frames read, " in n)
+    doc["verdicts"] = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    doc["details"] = {c["id"]: [k["detail"] for k in c["checks"]] for m in doc["messages"] for c in m["cases"]}
+    doc["counts"] = {c["id"]: {k["verdict"]: k["detail"] for k in c["checks"] if k["check"] == "count"}
+                     for m in doc["messages"] for c in m["cases"]}
+    return doc
+
+
+def one_line(out) -> str:
+    """The one line a hostile log is answered with on standard error (never a traceback)."""
+    assert "Traceback" not in out.err and out.err.count("\n") == 1, out.err
+    return out.err
+
+
+@pytest.fixture(scope="module")
+def log(tmp_path_factory) -> bytes:
+    """A synthetic LSF log of 600 frames of the suite's messages (requests, replies, ranges, heartbeats)."""
+    path = tmp_path_factory.mktemp("log") / "Data.lsf"
+    write_log(path, SUITE.defs, SUITE.wire, EDITION, 600)
+    return path.read_bytes()
+
+
+def frame_ends(data: bytes) -> list[int]:
+    ends, pos = [], 0
+    while pos < len(data):
+        pos += 22 + struct.unpack_from("<H", data, pos + 4)[0]
+        ends.append(pos)
+    return ends
+
+
+# ---------------------------------------------------------------- DUNE's own log
+
+@pytest.fixture(scope="module")
+def dune_folder(tmp_path_factory) -> Path:
+    """The recorded excerpt of DUNE's log with the IMC.xml DUNE was built from (imcpy's sdist: the same IMC 5.4.30)
+    written beside it, as DUNE's Logging task does (the XML is LSTS's, so it is fetched, not kept in the repo)."""
+    folder = tmp_path_factory.mktemp("dune-log")
+    shutil.copy(EXCERPT, folder / "Data.lsf.gz")
+    (folder / "IMC.xml.gz").write_bytes(gzip.compress(fetch_imc_xml().read_bytes()))
+    return folder
+
+
+def test_the_excerpt_of_dunes_log_is_small_and_dunes_own(dune_folder):
+    assert EXCERPT.stat().st_size < 400_000
+    data = gzip.decompress(EXCERPT.read_bytes())
+    assert data[:2] == b"\x54\xfe" and frame_ends(data)[-1] == len(data)  # whole frames, as DUNE wrote them
+
+
+def test_dunes_log_is_judged_message_by_message_with_the_xml_beside_it(dune_folder, tmp_path, capsys):
+    code, out = run(dune_folder / "Data.lsf.gz", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 0, out.err
+    assert doc["title"] == "IMC 5.4.30 (the log's IMC.xml)" and doc["edition"] == EDITION
+    assert any("IMC.xml.gz beside the log (IMC 5.4.30, 338 messages), which judges it" in n
+               and "agrees on all 32 messages both define" in n for n in doc["notes"])
+    frames = sum(int(c["PASS"].split()[0].replace(",", "")) for i, c in doc["counts"].items() if i.endswith("/frame/valid"))
+    assert frames == 14_615 and doc["read"].startswith("14,615 frames read, 14,615 judged")
+    assert set(doc["verdicts"].values()) == {"PASS"} and len(doc["messages"]) == 35
+    assert doc["counts"]["imc/EstimatedState/capture/frame/valid"] == {"PASS": "254 frames (frames 1075 to 14592)"}
+
+
+def test_a_recording_keeps_only_the_log_folders_dune_names_under_its_home(tmp_path, monkeypatch):
+    """``dune record`` moves the logs DUNE's console says it started; DUNE is under test: a folder outside its home,
+    or a name that is no date/time (a path that climbs), is left where it is."""
+    from imc_conformance.suites.imc.dune.conformance import _keep_logs
+
+    monkeypatch.setenv("IMC_CONFORMANCE_CACHE", str(tmp_path / "cache"))
+    logs, elsewhere = tmp_path / "cache" / "dune" / "build" / "log" / "lauv", tmp_path / "elsewhere"
+    victim = logs.parent.parent / "victim"  # where a climbing name points (and its target, inside tmp_path too)
+    for folder in (logs / "20261126" / "190755", elsewhere / "20261126" / "190756", victim):
+        folder.mkdir(parents=True)
+    console = tmp_path / "vehicle.log"
+    console.write_text(f"- MSG [Daemon] >> log folder: '{logs}'\n"
+                       "- MSG [Transports.Logging] >> log started '20261126/190755'\n"
+                       "- MSG [Transports.Logging] >> log started '../../victim'\n"
+                       f"- MSG [Daemon] >> log folder: '{elsewhere}'\n"
+                       "- MSG [Transports.Logging] >> log started '20261126/190756'\n")
+    out = tmp_path / "reports" / "dune" / "out"
+    assert _keep_logs(console, out) == [out / "20261126" / "190755"]
+    assert (out / "20261126" / "190755").is_dir() and (elsewhere / "20261126" / "190756").is_dir()
+    assert victim.is_dir() and not (tmp_path / "reports" / "victim").exists()
+    assert _keep_logs(tmp_path / "absent.log", out) == []
+
+
+def test_without_its_xml_the_suites_definitions_judge_it(dune_folder, tmp_path, capsys):
+    shutil.copy(dune_folder / "Data.lsf.gz", tmp_path / "Data.lsf.gz")
+    code, out = run(tmp_path / "Data.lsf.gz", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 0 and doc["title"] == "IMC"
+    assert "no IMC.xml beside Data.lsf.gz: the suite's definitions (IMC) judge it" in doc["notes"]
+    assert any("messages the suite does not cover (framing checked only)" in n for n in doc["notes"])
+
+
+def test_plain_gzip_and_bzip2_logs_are_judged_alike(log, tmp_path, capsys):
+    results = []
+    for name, data in (("Data.lsf", log), ("Data.lsf.gz", gzip.compress(log)), ("Data.lsf.bz2", bz2.compress(log)),
+                       ("members.gz", b"".join(gzip.compress(log[a:b]) for a, b in ((0, 9000), (9000, len(log)))))):
+        (tmp_path / name).write_bytes(data)
+        code, out = run(tmp_path / name, "--json", tmp_path / f"{name}.json", capsys=capsys)
+        assert code == 0, out.err
+        results.append(report(tmp_path / f"{name}.json")["counts"])
+    assert results[0] == results[1] == results[2] == results[3]
+
+
+def test_exchanges_in_a_log_are_judged(log, tmp_path, capsys):
+    (tmp_path / "Data.lsf").write_bytes(log)
+    run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    verdicts = report(tmp_path / "r.json")["verdicts"]
+    assert verdicts["imc/IridiumMsgTx/capture/exchange/iridium-transmission/answered"] == "PASS"
+    assert verdicts["imc/AcousticRequest/capture/exchange/acoustic-request/to-requester"] == "PASS"
+    end = last_time(log)
+    (tmp_path / "Data.lsf").write_bytes(log + query(end + 1) + heartbeats(end + 2, 40))  # never answered
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 1 and doc["verdicts"][QUERY_ANSWERED] == "FAIL"
+
+
+def test_an_exchange_open_across_a_jump_of_the_logs_clock_is_inconclusive(log, tmp_path, capsys):
+    end = last_time(log)
+    (tmp_path / "Data.lsf").write_bytes(log + query(end + 1) + heartbeats(end + 5000, 150))  # the clock set ahead
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert doc["verdicts"][QUERY_ANSWERED] == "INCONCLUSIVE" and code == 0
+    assert any("the log's clock jumped ahead 1 times" in n for n in doc["notes"])
+    assert "not judged: the log's clock jumped meanwhile" in doc["details"][QUERY_ANSWERED][1]
+
+
+def test_frames_stamped_by_another_clock_do_not_move_the_logs(log, tmp_path, capsys):
+    end = last_time(log)
+    burst = b"".join(heartbeats(end + 5000, 1) for _ in range(150))  # stamped alike, far ahead: no running clock
+    (tmp_path / "Data.lsf").write_bytes(log + query(end + 1) + burst + heartbeats(end + 2, 40))
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert doc["verdicts"][QUERY_ANSWERED] == "FAIL" and code == 1
+    assert "150 frames stamped more than 10 s from the log's clock (another system's clock, or no time) were timed " \
+           "by the log's" in doc["notes"]
+
+
+QUERY_ANSWERED = "imc/AcousticSystemsQuery/capture/exchange/acoustic-systems/answered"
+
+
+def last_time(log: bytes) -> float:
+    return struct.unpack_from("<d", log, frame_ends(log)[-2] + 6)[0]
+
+
+def query(t: float) -> bytes:
+    """An AcousticSystemsQuery from the station to the vehicle at ``t``."""
+    return codec.encode(SUITE.defs, {"abbrev": "AcousticSystemsQuery", "fields": {}, "header": {
+        "timestamp": t, "src": STATION, "src_ent": 255, "dst": VEHICLE, "dst_ent": 255}}, "le")
+
+
+def heartbeats(t: float, n: int) -> bytes:
+    """``n`` Heartbeats of the vehicle, one a second from ``t``."""
+    return b"".join(codec.encode(SUITE.defs, {"abbrev": "Heartbeat", "fields": {}, "header": {
+        "timestamp": t + i, "src": VEHICLE, "src_ent": 0, "dst": 0xFFFF, "dst_ent": 255}}, "le") for i in range(n))
+
+
+def test_a_failing_frame_is_listed_with_its_offset_in_the_log(log, tmp_path, capsys):
+    damaged = bytearray(log)
+    at = frame_ends(log)[9]  # the 11th frame begins here
+    damaged[at + 25] ^= 0x40
+    (tmp_path / "Data.lsf").write_bytes(bytes(damaged))
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = json.loads((tmp_path / "r.json").read_text())
+    listed = [k for m in doc["messages"] for c in m["cases"] if c["id"].endswith("/frame/crc") for k in c["checks"]
+              if k["check"].startswith("frame ")]
+    assert code == 1 and listed[0]["check"] == "frame 11" and f"byte {at:,}: byte" in listed[0]["detail"]
+
+
+def test_filters_by_message_system_and_time(log, tmp_path, capsys):
+    (tmp_path / "Data.lsf").write_bytes(log)
+    for argv, kept in ((["--message", "LblRange"], {"LblRange"}), (["--src", str(STATION)], None),
+                       (["--start", "10", "--end", "19.99"], None)):
+        run(tmp_path / "Data.lsf", *argv, "--json", tmp_path / "r.json", capsys=capsys)
+        doc = report(tmp_path / "r.json")
+        if kept:
+            assert {m["name"] for m in doc["messages"]} == kept
+        assert any("not judged: outside the selection" in n for n in doc["notes"]), argv
+    heartbeats = doc["counts"]["imc/Heartbeat/capture/frame/valid"]["PASS"]
+    assert heartbeats.startswith("10 frames")  # one a second, seconds 10 to 19
+    with pytest.raises(SystemExit):
+        run(tmp_path / "Data.lsf", "--host", "10.0.0.1", capsys=capsys)
+    assert "a log holds no IP addresses: give a system id" in capsys.readouterr().err
+
+
+def test_a_log_read_from_standard_input(log, tmp_path, monkeypatch, capsys):
+    class Stdin:
+        buffer = io.BytesIO(gzip.compress(log))
+    monkeypatch.setattr(sys, "stdin", Stdin)
+    code, out = run("-", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 0 and doc["read"].startswith("600 frames read")
+    assert "read from standard input: no IMC.xml beside it, the suite's definitions judge it" in doc["notes"]
+
+
+def test_logs_with_different_definitions_beside_them_are_judged_one_at_a_time(log, tmp_path, capsys):
+    for name, version in (("a", "5.4.30"), ("b", "5.4.31")):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "Data.lsf").write_bytes(log)
+        (tmp_path / name / "IMC.xml").write_text(
+            fetch_imc_xml().read_text(encoding="utf-8").replace('version="5.4.30"', f'version="{version}"', 1))
+    code, out = run(tmp_path / "a" / "Data.lsf", tmp_path / "b" / "Data.lsf", capsys=capsys)
+    assert code == 2 and "the logs come with different definitions beside them: judge them one at a time" in one_line(out)
+
+
+def test_what_the_judge_remembers_of_frames_stays_small(tmp_path):
+    """Decoded payloads are remembered to judge repeats at once, but not a large one, nor the fields of a valid
+    frame no exchange reads: a log of gigabytes of distinct frames does not fill the memory."""
+    reader = SUITE.log_reader()
+    judge = CaptureJudge("imc", reader.rules, reader.edition, Selection(), log=True)
+    texts = [codec.encode(SUITE.defs, {"abbrev": "TextMessage", "fields": {"origin": "x", "text": f"{i:04d}" * n},
+                                       "header": {"timestamp": 1.7e9 + i, "src": 1, "src_ent": 0, "dst": 2,
+                                                  "dst_ent": 0}}, "le") for i, n in ((1, 10), (2, 1000))]
+    for unit in reader.units(iter([b"".join(texts)]), [], "x"):
+        judge.logged(unit)
+    seen = reader.rules.seen
+    assert len(seen) == 1 and next(iter(seen.values())).fields is None  # the small one, without its fields
+    assert judge.valid["TextMessage"][0] == 2
+
+
+# ---------------------------------------------------------------- hostile logs
+
+@pytest.mark.parametrize("where", ["inside a header's first bytes", "inside a header", "inside a payload",
+                                   "inside a CRC"])
+def test_a_log_cut_at_every_kind_of_boundary_is_judged_up_to_the_cut(log, tmp_path, capsys, where):
+    ends = frame_ends(log)
+    start = ends[299]  # frame 301 begins here
+    size = ends[300] - start
+    cut = start + {"inside a header's first bytes": 3, "inside a header": 12, "inside a payload": 21,
+                   "inside a CRC": size - 1}[where]
+    (tmp_path / "Data.lsf").write_bytes(log[:cut])
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    line = one_line(out)
+    assert code == 2 and "cut short" in line and f"at byte {start:,}" in line
+    assert report(tmp_path / "r.json")["read"].startswith("300 frames read")
+
+
+def test_a_log_cut_at_a_frame_boundary_is_whole_but_a_cut_gzip_stream_says_so(log, tmp_path, capsys):
+    (tmp_path / "Data.lsf").write_bytes(log[:frame_ends(log)[299]])
+    code, out = run(tmp_path / "Data.lsf", capsys=capsys)
+    assert code == 0 and out.err == ""  # the frames say nothing more: the log may end there
+    packed = gzip.compress(log)
+    for cut in (5, len(packed) // 2, len(packed) - 4):  # in the gzip header, its data, its trailer
+        (tmp_path / "Data.lsf.gz").write_bytes(packed[:cut])
+        code, out = run(tmp_path / "Data.lsf.gz", capsys=capsys)
+        assert code == 2 and "Traceback" not in out.err, out.err
+        assert "the gzip stream that begins at byte 0 is cut short" in out.err.splitlines()[0]
+
+
+def test_a_wrong_imc_xml_is_said_and_a_missing_one_noted(log, tmp_path, capsys):
+    (tmp_path / "Data.lsf").write_bytes(log)
+    (tmp_path / "IMC.xml").write_bytes(b"<html>not IMC</html>")
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    line = one_line(out)
+    assert code == 2 and "IMC.xml: <html>: an IMC.xml's root is <messages name=\"IMC\">; the suite's definitions" in line
+    assert report(tmp_path / "r.json")["title"] == "IMC"
+    xml = fetch_imc_xml().read_text(encoding="utf-8")
+    changed = re.sub(r'(<message id="200"[^>]*>.*?<field name="Range" abbrev="range" type=")fp32_t', r"\1fp64_t", xml,
+                     count=1, flags=re.S)
+    assert changed != xml
+    (tmp_path / "IMC.xml").write_text(changed, encoding="utf-8")
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 1 and doc["verdicts"]["imc/LblRange/capture/frame/field-overrun"] == "FAIL"
+    assert any("they differ (1): LblRange field 2 is range:fp64_t in the log's IMC.xml, range:fp32_t in the suite" in n
+               for n in doc["notes"])
+    code, out = run(tmp_path / "Data.lsf", "--suite", "imc", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 0 and any("compared only: the definitions asked for (IMC) judge it" in n for n in doc["notes"])
+
+
+def test_a_gzip_bomb_is_refused_in_bounded_memory(log, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(streams, "BOMB_FLOOR", 4 << 20)
+    (tmp_path / "Data.lsf.gz").write_bytes(gzip.compress(log) + gzip.compress(bytes(64 << 20), 9))
+    code, out = run(tmp_path / "Data.lsf.gz", "--json", tmp_path / "r.json", capsys=capsys)
+    lines = out.err.splitlines()
+    assert code == 2 and "Traceback" not in out.err
+    assert "more than 200 times their size (no log compresses so well: a decompression bomb?): refused" in lines[0]
+    assert report(tmp_path / "r.json")["read"].startswith("600 frames read")
+
+
+def test_garbage_after_a_bzip2_stream_is_ignored_in_one_line(log, tmp_path, capsys):
+    (tmp_path / "Data.lsf.bz2").write_bytes(bz2.compress(log) + b"\x00garbage after the stream")
+    code, out = run(tmp_path / "Data.lsf.bz2", "--json", tmp_path / "r.json", capsys=capsys)
+    assert code == 2 and "25 bytes after the bzip2 data" in one_line(out) and "are not bzip2: ignored" in out.err
+    assert report(tmp_path / "r.json")["read"].startswith("600 frames read")
+
+
+def test_a_frame_claiming_more_than_the_file_holds(log, tmp_path, capsys):
+    claim = bytearray(log[:frame_ends(log)[0]])
+    struct.pack_into("<H", claim, 4, 0xFFF0)
+    (tmp_path / "Data.lsf").write_bytes(log + bytes(claim))
+    code, out = run(tmp_path / "Data.lsf", capsys=capsys)
+    assert code == 2 and f"the log ends inside a frame of Heartbeat at byte {len(log):,} (22 of its 65,542 bytes): cut " \
+                         "short, judged up to it" in one_line(out)
+
+
+def test_bytes_that_are_no_frame_are_skipped_to_the_next_frame(log, tmp_path, capsys):
+    at = frame_ends(log)[99]
+    (tmp_path / "Data.lsf").write_bytes(log[:at] + b"\x54\xfe\xff\xff garbage " * 30 + log[at:])
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    assert code == 2 and f"1 stretch of bytes that are no IMC frame (390 bytes, the first at byte {at:,})" in one_line(out)
+    assert report(tmp_path / "r.json")["read"].startswith("600 frames read")
+
+
+def test_synchronization_numbers_before_ids_imc_xml_lacks_are_one_stretch(log, tmp_path, capsys):
+    """A megabyte of places where a frame could begin (a synchronization number, then the null id) is one stretch,
+    searched in one pass (searched again from each place, it took minutes)."""
+    at = frame_ends(log)[99]
+    (tmp_path / "Data.lsf").write_bytes(log[:at] + b"\xfe\x54\xff\xff" * (1 << 18) + log[at:])
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    assert code == 2 and f"1 stretch of bytes that are no IMC frame (1,048,576 bytes, the first at byte {at:,})" \
+        in one_line(out)
+    assert report(tmp_path / "r.json")["read"].startswith("600 frames read")
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"", "empty, not a log"),
+    (b"hello world", "not a log of a format the suites read (LSF, ROS 1 bag): it starts 68656c6c6f20776f"),
+    (gzip.compress(b"hello world", mtime=0), "not a log of a format the suites read (LSF, ROS 1 bag): it starts 68656c6c6f"),
+])
+def test_a_file_that_is_no_log_is_one_line(tmp_path, capsys, content, message):
+    (tmp_path / "x").write_bytes(content)
+    code, out = run(tmp_path / "x", capsys=capsys)
+    assert code == 2 and message in one_line(out)
+
+
+def test_a_device_is_read_to_a_bound_and_a_folder_refused(tmp_path, capsys):
+    code, out = run("/dev/zero", capsys=capsys)
+    assert code == 2 and "it starts 0000000000000000" in one_line(out)
+    code, out = run(tmp_path, capsys=capsys)
+    assert code == 2 and "a directory" in one_line(out)
+
+
+def test_streams_decompress_in_bounded_pieces(log):
+    class File:
+        def __init__(self, data):
+            self.data, self.pos = data, 0
+
+        def read(self, n):
+            out = self.data[self.pos:self.pos + n]
+            self.pos += len(out)
+            return out
+    data = (log * 700)[:3 << 20]
+    noise = random.Random(0).randbytes(3 << 20)  # incompressible: members straddle the pieces read from the file
+    members = [noise[i:i + 700_001] for i in range(0, len(noise), 700_001)]
+    for packed, data in ((gzip.compress(data), data), (bz2.compress(data[:1 << 20]) + bz2.compress(data[1 << 20:]), data),
+                         (data, data), (b"".join(gzip.compress(m) for m in members), noise),
+                         (b"".join(bz2.compress(m) for m in members), noise)):
+        stream = streams.Stream(Path("x"), File(packed), len(packed))
+        pieces = list(stream.pieces())
+        assert b"".join(pieces) == data and max(map(len, pieces)) <= streams.PIECE and not stream.damage
+
+
+@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(sizes=st.lists(st.integers(1, 300), min_size=1, max_size=20), garbage=st.binary(max_size=40))
+def test_a_log_read_in_any_pieces_gives_the_same_frames(log, sizes, garbage):
+    data = log[:4000] + garbage + log[4000:8000]
+    pieces, pos, i = [], 0, 0
+    while pos < len(data):
+        pieces.append(data[pos:pos + sizes[i % len(sizes)]])
+        pos += sizes[i % len(sizes)]
+        i += 1
+    reader = SUITE.log_reader()
+    whole, split = [], []
+    for source, out in (([data], whole), (pieces, split)):
+        damage: list[str] = []
+        out += [(u.offset, u.payload) for u in reader.units(iter(source), damage, "x")]
+        out.append(damage)
+    assert split == whole
+
+
+@pytest.fixture(scope="module")
+def small_logs(log):
+    part = log[:frame_ends(log)[40]]
+    return [part, gzip.compress(part), bz2.compress(part)]
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(which=st.integers(0, 2), edits=st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 255)), max_size=8),
+       cut=st.integers(0, 4_000))
+def test_a_damaged_log_is_judged_or_refused_never_a_crash(small_logs, which, edits, cut):
+    buf = bytearray(small_logs[which])
+    for at, value in edits:
+        buf[at % len(buf)] = value
+    buf = bytes(buf[:max(1, len(buf) - cut)])
+
+    class File:
+        def read(self, n, data=[buf]):
+            out, data[0] = data[0][:n], data[0][n:]
+            return out
+    stream = streams.Stream(Path("x"), File(), len(buf))
+    reader = SUITE.log_reader()
+    judge = CaptureJudge("imc", reader.rules, reader.edition, Selection(), log=True)
+    damage: list[str] = []
+    for unit in reader.units(stream.pieces(), damage, "x"):
+        assert unit.__class__ is Logged
+        judge.logged(unit)
+    judge.result(implementation="fuzz", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False, title="IMC")
+    assert all("\n" not in line for line in damage + stream.damage)
