@@ -361,3 +361,16 @@ def test_report_screenshot(tmp_path):
     width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
     assert (width, height) == tuple(int(n) for n in tool("screenshot").WINDOW.split(","))
     assert len(data) > 20_000  # a rendered report, not a blank page
+
+
+# --- the README, the front door -----------------------------------------------------------------------------------
+
+def test_readme_is_a_front_door_into_the_manual():
+    """Short (under 200 lines), its relative links and image all present, and it links every part of the manual."""
+    text = (CHECKOUT / "README.md").read_text(encoding="utf-8")
+    assert len(text.splitlines()) < 200
+    targets = re.findall(r"\]\(([^)\s#]+)(?:#[^)]*)?\)", text)
+    local = [t for t in targets if not t.startswith(("http://", "https://"))]
+    assert all((CHECKOUT / t).exists() for t in local), [t for t in local if not (CHECKOUT / t).exists()]
+    assert {"docs/tutorial.md", "docs/how-to/ci.md", "docs/reference/cli.md", "docs/explanation/design.md",
+            "docs/images/html-report.png"} <= set(local)
