@@ -252,7 +252,7 @@ class Browser:
     """Debian's headless Chromium, driven over the DevTools protocol on a pipe (``--remote-debugging-pipe``):
     the search runs in a web worker after the page has loaded, which ``--dump-dom`` does not wait for."""
 
-    def __init__(self, profile: Path, timeout: float = 60):
+    def __init__(self, profile: Path, timeout: float = 180):
         to_browser, from_browser = os.pipe(), os.pipe()
 
         def child():  # the protocol's descriptors are 3 (commands) and 4 (answers)
@@ -296,7 +296,7 @@ class Browser:
         assert self.wait_for(session, "document.readyState === 'complete'"), f"{url} did not load"
         return session
 
-    def wait_for(self, session: str, expression: str, timeout: float = 30):
+    def wait_for(self, session: str, expression: str, timeout: float = 60):
         """The value of a JavaScript expression once it is truthy in the page."""
         end = time.monotonic() + timeout
         while True:

@@ -6,9 +6,11 @@ site at the next build without anyone editing a page), the adapter contract (``a
 Schemas, the errata, and the tables ``imc-conformance generate`` writes from the corpus data (rule provenance,
 behavioural coverage with the ambiguity register, corpus coverage). Nothing is written into the checkout.
 
-A hook in the repository rather than a plug-in: the argparse plug-ins on PyPI render one parser per directive and
-none knows this CLI's registry of commands (``commands.add``), while walking the parsers here takes a page of code
-and no dependency beyond MkDocs itself."""
+A hook in the repository rather than a plug-in (MkDocs runs it with the build: nothing generated is ever committed,
+so nothing can go stale): the argparse plug-ins for MkDocs on PyPI are young or for another formatter (mkdocs-argparse
+has one 0.0.1 release, mkdocs-rich-argparse documents rich-argparse parsers), and argparse-help-markdown writes a
+file to commit (with cog); walking the parsers, the commands in ``commands.COMMANDS`` order then each suite's own,
+takes a page of code and no dependency beyond MkDocs itself."""
 
 from __future__ import annotations
 
