@@ -1,6 +1,7 @@
 # Two commands do all setup on a fresh machine (Python 3.11+ and network access to PyPI):
 #   make conformance   run the suite against imcpy (DUNE's C++ codec) with the defaults
 #   make test          run the project's own tests (against imcpy and pyimclsts too)
+# make docs builds the manual (docs/, mkdocs.yml) with --strict into site/ and serves it on http://127.0.0.1:8000.
 VENV ?= .venv
 PYTHON ?= python3
 
@@ -9,12 +10,23 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters
+.PHONY: conformance test docs screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
 test: $(VENV)/.installed
 	$(VENV)/bin/python -m pytest -n auto --maxprocesses 4
+
+# The manual: built with --strict (a broken link or reference stops it), its reference pages generated from the
+# argument parsers and the corpus data (docs/tools/hooks.py), then served until Ctrl-C. The tests build it too
+# (into a temporary folder), run its runnable examples and open it in Chromium (tests/test_docs.py).
+docs: $(VENV)/.installed
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs serve --strict --dev-addr 127.0.0.1:8000
+
+# The screenshot of the HTML report the README and the manual show (Debian's chromium), taken again.
+screenshot: $(VENV)/.installed
+	$(VENV)/bin/python docs/tools/screenshot.py docs/images/html-report.png
 
 generate: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance generate

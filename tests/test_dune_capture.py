@@ -1,8 +1,8 @@
 """Real DUNE traffic, recorded by ``make dune-conformance --no-robustness`` (``run --pcap``, in its network namespace;
 DUNE from the imcpy 1.1.2 sdist as lauv-simulator-1, the seed profile's scenarios, DUNE's claims: AcousticRequest only
 for itself): the pcap command replays the scenario engine over it and gives the live run's verdicts, and the passive
-exchange rules find in the bare frames what the scenarios found. Why DUNE fails what it fails is in the README's DUNE
-section, with DUNE's source lines."""
+exchange rules find in the bare frames what the scenarios found. Why DUNE fails what it fails is in the manual's DUNE
+page (docs/how-to/dune.md), with DUNE's source lines."""
 
 from __future__ import annotations
 
