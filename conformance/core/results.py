@@ -11,8 +11,9 @@ import re
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 
+from .cases import source_case
 from .causes import Cause, cause_from, group_causes, regrouped
-from .verdicts import UNTESTED, Verdict, failing
+from .verdicts import ATTENTION, UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
 VERSION = 5
@@ -161,6 +162,11 @@ class RunResult:
     def summary(self) -> dict[str, int]:
         counts = Counter(c.verdict.value for c in self.cases)
         return {v.value: counts[v.value] for v in Verdict if counts[v.value]}
+
+    def not_passed(self) -> list[str]:
+        """The ids of the corpus's cases to run again (``run --last-failed``): those that did not pass (a verdict of
+        ``ATTENTION``), a finding filed under another group by the case that made it, in the result's order."""
+        return list(dict.fromkeys(source_case(c.id) for c in self.cases if c.verdict in ATTENTION))
 
     def exit_code(self) -> int:
         """130 if interrupted; else 2 for an adapter error or protocol violation, or when nothing was tested

@@ -8,11 +8,9 @@ import shlex
 
 from ..core.causes import Cause
 from ..core.results import INTERRUPTED, CaseResult, RunResult
-from ..core.verdicts import FAILING, UNTESTED, Verdict
+from ..core.verdicts import ATTENTION, UNTESTED, Verdict
 
 VERDICTS = tuple(Verdict)
-# The cases a report details: every failing verdict, and NON_STRICT and INCONCLUSIVE even when they do not fail the run.
-ATTENTION = (*FAILING, Verdict.NON_STRICT, Verdict.INCONCLUSIVE)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
 
 def overall(result: RunResult) -> str:
