@@ -141,6 +141,28 @@ def test_a_failing_scenario_keeps_its_timeline(suite, cases):
         assert "after the terminal state" in text or fmt == "json" and "after-terminal" in text
 
 
+def test_the_html_report_shows_every_scenarios_timeline_and_the_bound_that_decided_each_step(suite, cases):
+    from imc_conformance.render.html import render_html
+    from imc_conformance.schemas import schema_error
+    from imc_conformance.paths import VECTORS
+
+    chosen = [c for c in cases if c.group in ("LblConfig", "AcousticSystemsQuery")]
+    result, _ = run_virtual(suite, chosen, broken="no-cur-cfg")
+    case = next(c for c in result.cases if c.id == "imc/LblConfig/scenario/get-cfg")
+    timer = next(e for e in case.timeline if e["event"] == "timer")
+    assert timer["bound"] == {"of": "within", "seconds": 5.0, "name": "first-reply"}
+    assert timer["note"] == "the step's time is up: its within bound, 5 s (first-reply), ran out, after 5 tries"
+    assert schema_error(VECTORS / "schema" / "result.schema.json", result.to_dict(), "result") is None
+    html = render_html(result)
+    failed = html.split(f'data-case="{case.id}"', 1)[1].split("</section>", 1)[0]
+    decided = re.findall(r'<tr data-event="(\w+)" class="decided">', failed)
+    assert decided == ["timer"] and "its within bound, 5 s (first-reply), ran out, after 5 tries" in failed
+    others = [c for c in result.cases if c.timeline and c.verdict is Verdict.PASS]
+    assert others and all(f'<details class="scenario" data-case="{c.id}"' in html for c in others)
+    replied = html.split(f'<details class="scenario" data-case="{others[0].id}"', 1)[1].split("</details>\n", 1)[0]
+    assert 'class="decided"' in replied
+
+
 @pytest.mark.parametrize("seed", range(1, 21))
 def test_loss_and_duplication_are_absorbed_and_reruns_are_identical(suite, cases, seed):
     first, _ = run_virtual(suite, cases, loss=0.1, dup=0.05, seed=seed)

@@ -142,8 +142,8 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
                                             data["clause"], checks, data.get("rule"), explained,
                                             waiver.reason if waiver else None, timelines.get(case.id, [])))
         for group, passive in (findings_elsewhere(elsewhere, groups).items() if elsewhere else ()):
-            filed[group].append(CaseResult(passive_id(name, group, case.id), group, worst(r.verdict for r in passive), None,
-                                           passive[0].clause or "", passive))
+            filed[group].append(CaseResult(passive_id(name, group, case.id), group, worst(r.verdict for r in passive),
+                                           None, passive[0].clause or "", passive))
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
                 for g in suite.groups if g.name in filed]
     data = {case.id: case.data for case in cases}

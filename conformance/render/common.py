@@ -36,6 +36,19 @@ def timeline_lines(case: CaseResult, limit: int = TIMELINE_LIMIT) -> list[str]:
     return lines
 
 
+DECIDING = ("timer", "received", "acknowledged", "refused")  # timeline events that can decide a step
+
+
+def decided_at(timeline: list[dict]) -> set[int]:
+    """The entries of a timeline (by index) that decided a step: of each step, its last frame taken or, when its
+    bound ran out, its timer (which names the bound)."""
+    last: dict[str, int] = {}
+    for i, e in enumerate(timeline):
+        if e.get("event") in DECIDING and "step" in e:
+            last[e["step"]] = i
+    return set(last.values())
+
+
 def incident_lines(result: RunResult) -> list[str]:
     """One sentence per incident of the run."""
     return [f"{i.kind} incident: {i.reason}; the adapter was restarted and the {len(i.cases)} case(s) in flight "

@@ -631,7 +631,21 @@ class Machine:
             what = f"{what} within {bound} s{tries}{malformed}{refused}{_unmatched(step)}"
             if got or not self._silence_allowed(step, what):
                 self._find(step, "", False, what, blind=self._blind(step))
-        self.timeline.append({"t": self._rel(t), "event": "timer", "step": spec["id"], "note": "the step's time is up"})
+        self.timeline.append(self._timer(t, step))
+
+    def _timer(self, t: float, step: _Step) -> dict:
+        """The timeline entry of a step whose time is up, saying which of its bounds decided it: the time it is given
+        (``within``, ``for``, ``wait``) or the quiet period after a terminal state, in seconds of the run, with the
+        suite's name for it and the tries made."""
+        spec = step.spec
+        quiet = step.terminal is not None and step.bound is not None and step.until != step.bound
+        key = "quiet" if quiet else next(k for k in ("within", "for", "wait") if k in spec)
+        value = spec.get("quiet", 1.0) if quiet else spec[key]
+        bound = {"of": key, "seconds": self._bound(value)} | ({"name": value} if isinstance(value, str) else {})
+        tries = f", after {step.tries} tries" if step.tries > 1 else ""
+        return {"t": self._rel(t), "event": "timer", "step": spec["id"], "bound": bound,
+                "note": f"the step's time is up: its {key} bound, {bound['seconds']:g} s"
+                        + (f" ({value})" if isinstance(value, str) else "") + f", ran out{tries}"}
 
     def _judge_sequence(self, step: _Step, bound) -> None:
         spec = step.spec
