@@ -425,7 +425,7 @@ def live_rows(suite, everything, repeat: int, robustness: bool) -> dict[str, flo
     clean = protocol_time(None)
     broken = {name: protocol_time(name) for name in BREAKS if name != "leaks-on-drop"}  # that one needs the flood
     slowest = max(broken, key=broken.get)
-    out = {"live reference": clean, "live ratio": broken[slowest] / clean,
+    out = {"live reference": round(clean, 3), "live ratio": broken[slowest] / clean,
            "live median ratio": statistics.median(broken.values()) / clean}
     out |= {f"live ratio {name}": seconds / clean for name, seconds in broken.items()}
     node = subprocess.Popen([sys.executable, "-m", "imc_conformance.cli", "serve", "--port", "0"],

@@ -146,7 +146,9 @@ def command(args) -> int:
     finally:
         session.close()
         if recorder is not None:
-            recorder.close(complete=result is not None and result.complete)
+            # a run stopped at its first failure (--exitfirst) recorded only part of the exchange, as an interrupted one
+            stopped = args.exitfirst and result is not None and any(failing(c.verdict, args.strict) for c in result.cases)
+            recorder.close(complete=result is not None and result.complete and not stopped)
     if args.shard:
         result.shard = args.shard
         result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's {total} "

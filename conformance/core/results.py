@@ -57,10 +57,13 @@ class Judgement:
 
 @dataclass
 class Incident:
-    """Something the adapter did that no single case is to blame for, answered by restarting it and replaying.
+    """Something the adapter did that no single case is to blame for, answered by restarting it and replaying; or a
+    live target that stopped sending anything mid-run.
 
-    ``kind``: ``protocol`` (it broke the adapter protocol: the run exits 2) or ``crash`` (it died or
-    stopped answering, yet each request then succeeded alone: the run exits 1). ``cases``: those in flight.
+    ``kind``: ``protocol`` (it broke the adapter protocol: the run exits 2), ``crash`` (it died or
+    stopped answering, yet each request then succeeded alone: the run exits 1) or ``gone`` (a live target stopped
+    sending anything, liveness: what waited on it was decided then, untested; the run exits 1). ``cases``: those in
+    flight, or decided then.
     """
 
     kind: str
@@ -171,7 +174,7 @@ class RunResult:
     def exit_code(self) -> int:
         """130 if interrupted; else 2 for an adapter error or protocol violation, or when nothing was tested
         (every case INCONCLUSIVE or UNSUPPORTED; a shard of no case tested all it was given); else 1 for a failing
-        verdict, a crash incident or (under --strict) a check kind left untested; else 0."""
+        verdict, a crash or gone incident or (under --strict) a check kind left untested; else 0."""
         if not self.complete:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}

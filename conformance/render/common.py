@@ -36,7 +36,7 @@ def timeline_lines(case: CaseResult, limit: int = TIMELINE_LIMIT) -> list[str]:
     return lines
 
 
-DECIDING = ("timer", "received", "acknowledged", "refused")  # timeline events that can decide a step
+DECIDING = ("timer", "gone", "received", "acknowledged", "refused")  # timeline events that can decide a step
 
 
 def decided_at(timeline: list[dict]) -> set[int]:
@@ -51,9 +51,10 @@ def decided_at(timeline: list[dict]) -> set[int]:
 
 def incident_lines(result: RunResult) -> list[str]:
     """One sentence per incident of the run."""
-    return [f"{i.kind} incident: {i.reason}; the adapter was restarted and the {len(i.cases)} case(s) in flight "
-            f"replayed one by one ({', '.join(i.cases[:5])}{', ...' if len(i.cases) > 5 else ''})"
-            for i in result.incidents]
+    return [f"{i.kind} incident: {i.reason}; " + ("the" if i.kind == "gone" else "the adapter was restarted and the")
+            + f" {len(i.cases)} case(s) " + ("waiting on it were decided then, untested" if i.kind == "gone" else
+                                             "in flight replayed one by one")
+            + f" ({', '.join(i.cases[:5])}{', ...' if len(i.cases) > 5 else ''})" for i in result.incidents]
 
 
 def provenance_lines(result: RunResult) -> list[str]:
