@@ -219,8 +219,7 @@ def test_a_node_that_stops_sending_anything_is_taken_for_gone_and_what_waits_on_
         assert all(e["note"].startswith("decided before its") for e in decided)
     assert any(c.verdict is Verdict.INCONCLUSIVE for c in after)
     assert not [c.id for c in result.cases if c.verdict in (Verdict.FAIL, Verdict.NON_STRICT)]
-    _, clean = run_virtual(suite, cases)
-    assert link.now() < clean.now()  # decided once it was gone, not bound after bound (hundreds of seconds)
+    assert link.now() < CRASH_AT + 10  # decided once it was gone, not bound after bound (261 s without liveness)
 
 
 @pytest.mark.parametrize("seed", range(1, 21))
