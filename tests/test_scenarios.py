@@ -141,6 +141,87 @@ def test_a_failing_scenario_keeps_its_timeline(suite, cases):
         assert "after the terminal state" in text or fmt == "json" and "after-terminal" in text
 
 
+def test_the_html_report_shows_every_scenarios_timeline_and_the_bound_that_decided_each_step(suite, cases):
+    from imc_conformance.render.html import render_html
+    from imc_conformance.schemas import schema_error
+    from imc_conformance.paths import VECTORS
+
+    chosen = [c for c in cases if c.group in ("LblConfig", "AcousticSystemsQuery")]
+    result, _ = run_virtual(suite, chosen, broken="no-cur-cfg")
+    case = next(c for c in result.cases if c.id == "imc/LblConfig/scenario/get-cfg")
+    timer = next(e for e in case.timeline if e["event"] == "timer")
+    assert timer["bound"] == {"of": "within", "seconds": 5.0, "name": "first-reply"}
+    assert timer["note"] == "the step's time is up: its within bound, 5 s (first-reply), ran out, after 5 tries"
+    assert schema_error(VECTORS / "schema" / "result.schema.json", result.to_dict(), "result") is None
+    html = render_html(result)
+    failed = html.split(f'data-case="{case.id}"', 1)[1].split("</section>", 1)[0]
+    decided = re.findall(r'<tr data-event="(\w+)" class="decided">', failed)
+    assert decided == ["timer"] and "its within bound, 5 s (first-reply), ran out, after 5 tries" in failed
+    others = [c for c in result.cases if c.timeline and c.verdict is Verdict.PASS]
+    assert others and all(f'<details class="scenario" data-case="{c.id}"' in html for c in others)
+    replied = html.split(f'<details class="scenario" data-case="{others[0].id}"', 1)[1].split("</details>\n", 1)[0]
+    assert 'class="decided"' in replied
+
+
+CRASH_AT = 30.0  # virtual seconds into the run
+
+
+def crashing_node(suite, **options):
+    """The reference node until CRASH_AT, then a crashed process: nothing comes in or goes out."""
+    from imc_conformance.suites.imc.node import ReferenceNode
+    from live_harness import NODE
+
+    class CrashingNode(ReferenceNode):
+        def receive(self, t, data, source):
+            if t < CRASH_AT:
+                super().receive(t, data, source)
+
+        def due(self, t):
+            return super().due(t) if t < CRASH_AT else []
+
+        @property
+        def deadline(self):
+            deadline = super().deadline
+            return deadline if deadline is not None and deadline < CRASH_AT else None
+
+    return CrashingNode(suite.defs, suite.behaviour, edition=suite.editions[0], address=NODE, **options)
+
+
+@pytest.mark.parametrize("beats", [True, False])
+def test_a_node_that_stops_sending_anything_is_taken_for_gone_and_what_waits_on_it_is_decided_then(suite, cases,
+                                                                                                     beats):
+    """Liveness: a node that heart-beat and then sends nothing at all is taken for gone once, and every step still
+    waiting on it is decided then, untested (INCONCLUSIVE, never FAIL), instead of each waiting out its bound; a node
+    that never heart-beats is never taken for gone (its silent steps wait their bounds, and fail)."""
+    from imc_conformance.core.runner import run_cases
+    from live_harness import virtual_session
+
+    node = crashing_node(suite, **({} if beats else {"broken": "no-heartbeat"}))
+    session, link = virtual_session(suite, suite.editions[0], node=node)
+    result = run_cases(session, suite, scenario_cases(cases), edition=suite.editions[0], adapter="virtual", options=EVERYTHING,
+                       clock=link.now)
+    after = [c for c in result.cases if c.timeline and any(e["event"] == "gone" for e in c.timeline)]
+    if not beats:
+        assert not result.incidents and not after and any(c.verdict is Verdict.FAIL for c in result.cases)
+        return
+    [gone] = result.incidents
+    assert gone.kind == "gone" and "taken for gone" in gone.reason and sorted(gone.cases) == sorted(c.id for c in after)
+    assert result.exit_code() == 1  # a node that stops mid-run fails the run, though no step could be judged
+    from imc_conformance.paths import VECTORS
+    from imc_conformance.schemas import schema_error
+
+    assert schema_error(VECTORS / "schema" / "result.schema.json", result.to_dict(), "result") is None
+    for fmt, render in RENDERERS.items():
+        assert "decided then, untested" in render(result), fmt
+    for case in after:
+        assert case.verdict in (Verdict.INCONCLUSIVE, Verdict.PASS, Verdict.IMPL_DEFINED), (case.id, case.detail)
+        decided = [e for e in case.timeline if e["event"] == "gone"]
+        assert all(e["note"].startswith("decided before its") for e in decided)
+    assert any(c.verdict is Verdict.INCONCLUSIVE for c in after)
+    assert not [c.id for c in result.cases if c.verdict in (Verdict.FAIL, Verdict.NON_STRICT)]
+    assert link.now() < CRASH_AT + 10  # decided once it was gone, not bound after bound (261 s without liveness)
+
+
 @pytest.mark.parametrize("seed", range(1, 21))
 def test_loss_and_duplication_are_absorbed_and_reruns_are_identical(suite, cases, seed):
     first, _ = run_virtual(suite, cases, loss=0.1, dup=0.05, seed=seed)

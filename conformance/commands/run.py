@@ -10,6 +10,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import UsageError
+from ..escaping import printable
 from .options import add_adapter, add_reports, add_selection, add_target
 
 
@@ -23,6 +24,13 @@ def add(sub) -> None:
     run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids with a reason and optional expiry")
     run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument("--last-failed", "--lf", metavar="FILE",
+                     help="run again only the cases that did not pass in FILE, a result saved by run --json (a failing "
+                          "verdict, NON_STRICT or INCONCLUSIVE), narrowed further by --message, --id and --tag; the "
+                          "edition is the result's unless --edition is given; nothing to run again exits 0")
+    run.add_argument("--exitfirst", "-x", action="store_true",
+                     help="stop at the first case that fails (under --strict, NON_STRICT and INCONCLUSIVE too): the "
+                          "reports hold the cases done by then")
     live = run.add_argument_group("scenarios and live targets")
     add_target(live, "run the scenarios against")
     live.add_argument("--claims", metavar="FILE",
@@ -39,16 +47,16 @@ def add(sub) -> None:
     run.set_defaults(func=command)
 
 
-def selection(args):
+def selection(args, rerun: frozenset[str] | None = None):
     """The suite, the cases of its corpus that were read, the cases the options select (in the shard ``--shard``
-    names) and how many the selection holds in all shards. Only the files of the selected messages are read
-    (``--message``, or an id glob naming one) unless the run needs the whole corpus (waivers name any case; the
-    robustness phase replays every frame)."""
+    names; only those of ``rerun`` when given) and how many the selection holds in all shards. Only the files of
+    the selected messages are read (``--message``, an id glob naming one, or the cases to rerun) unless the run
+    needs the whole corpus (waivers name any case; the robustness phase replays every frame)."""
     from ..core.cases import select_cases
     from ..files import open_corpus
 
     whole = getattr(args, "waivers", None) or getattr(args, "robustness", False)
-    suite, everything = open_corpus(args.suite, args.vectors, None if whole else selected_groups(args))
+    suite, everything = open_corpus(args.suite, args.vectors, None if whole else selected_groups(args, rerun))
     args.edition = args.edition or suite.editions[0]
     if args.edition not in suite.editions:
         raise UsageError(f"unknown edition {args.edition!r} of the suite {suite.name!r} "
@@ -56,14 +64,16 @@ def selection(args):
     unknown = set(args.message) - {g.name for g in suite.groups}
     if unknown:
         raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
-    chosen = select_cases(everything, args.edition, args.message, args.id, args.tag)
+    chosen = select_cases(everything, args.edition, args.message, args.id, args.tag, ids=rerun)
     return suite, everything, select_cases(chosen, args.edition, shard=args.shard), len(chosen)
 
 
-def selected_groups(args) -> frozenset[str] | None:
+def selected_groups(args, rerun: frozenset[str] | None = None) -> frozenset[str] | None:
     """The groups (messages, types) the selection can only come from, or None when it may come from any."""
     if args.message:
         return frozenset(args.message)  # an id glob only narrows them further
+    if rerun is not None:
+        return frozenset(case_id.split("/")[1] for case_id in rerun if "/" in case_id)
     named = set()
     for glob in args.id:
         parts = glob.split("/")
@@ -80,14 +90,17 @@ def command(args) -> int:
     from ..core.verdicts import failing
     from ..core.waivers import WaiverError
     from ..files import load_waivers
-    from ..escaping import printable
     from ..render.terminal import print_result
     from .adapters import adapter_choice, open_session
     from .output import report_targets, terminal, write_file, write_reports
     from .provenance import provenance
 
     targets = report_targets(args)
-    suite, everything, cases, total = selection(args)
+    rerun, rerun_notes = last_failed(args)
+    if rerun is not None and not rerun:
+        print(f"imc-conformance: every case of {printable(args.last_failed)} passed: nothing to run again")
+        return 0
+    suite, everything, cases, total = selection(args, rerun)
     gc.freeze()  # the corpus stays loaded to the end: the collector need never walk it again
     try:
         options = live.options(args, suite, everything)
@@ -109,7 +122,8 @@ def command(args) -> int:
             waivers, notes, waived = load_waivers(Path(args.waivers), {c.id for c in everything}, dt.date.today())
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
-    made = provenance(args, suite, {"message": args.message, "id": args.id, "tag": args.tag, "cases": total},
+    chosen = {"message": args.message, "id": args.id, "tag": args.tag, "cases": total}
+    made = provenance(args, suite, chosen | ({"last_failed": args.last_failed} if args.last_failed else {}),
                       waivers=waived)
     console = terminal()
     args.first_unique = live.first_unique() if args.target else None
@@ -124,14 +138,17 @@ def command(args) -> int:
     try:
         with progress_bar(args.no_progress) as progress:
             result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
-                               waivers=waivers, strict=args.strict, notes=notes + held_notes + live.notes(args, options),
-                               progress=progress, options=options, provenance=made)
+                               waivers=waivers, strict=args.strict,
+                               notes=rerun_notes(len(cases)) + notes + held_notes + live.notes(args, options),
+                               progress=progress, options=options, provenance=made, exitfirst=args.exitfirst)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
     finally:
         session.close()
         if recorder is not None:
-            recorder.close(complete=result is not None and result.complete)
+            # a run stopped at its first failure (--exitfirst) recorded only part of the exchange, as an interrupted one
+            stopped = args.exitfirst and result is not None and any(failing(c.verdict, args.strict) for c in result.cases)
+            recorder.close(complete=result is not None and result.complete and not stopped)
     if args.shard:
         result.shard = args.shard
         result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's {total} "
@@ -155,6 +172,31 @@ def command(args) -> int:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     return 2 if problems else result.exit_code()
+
+
+def last_failed(args):
+    """What ``--last-failed FILE`` runs again: the ids of the cases that did not pass in the saved result (None
+    without the option), and the note the report makes of the rerun given how many cases it runs. The result's
+    edition is the run's unless ``--edition`` is given; a result of another suite is a usage error."""
+    if args.last_failed is None:
+        return None, lambda selected: []
+    from ..files import read_result
+
+    shown = printable(args.last_failed)
+    try:
+        saved = read_result(Path(args.last_failed))
+    except ValueError as exc:  # not JSON, unreadable, or not a valid result
+        raise UsageError(f"--last-failed: cannot read the result {exc}") from exc
+    if saved.suite != args.suite:
+        raise UsageError(f"--last-failed {shown}: a result of the suite {saved.suite!r}, not of {args.suite!r} "
+                         f"(give --suite {saved.suite})")
+    args.edition = args.edition or saved.edition
+    ids = saved.not_passed()
+
+    def note(selected: int) -> list[str]:
+        return [f"run again: {selected} of the {len(ids)} cases that did not pass in {shown}"
+                + ("" if selected == len(ids) else " (the others are not selected, or not in this corpus and edition)")]
+    return frozenset(ids), note
 
 
 def hold_practices(cases: list, options: dict) -> tuple[list, list[str]]:

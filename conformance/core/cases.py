@@ -18,6 +18,17 @@ class Case:
     data: dict
 
 
+def passive_id(suite: str, group: str, case_id: str) -> str:
+    """The id of what a case found about another group (e.g. the bytes of a reply, under the reply's message)."""
+    return f"{suite}/{group}/passive/{case_id.split('/', 1)[1]}"
+
+
+def source_case(case_id: str) -> str:
+    """The case of the corpus a result's case comes from: itself, or the case whose finding it is (``passive_id``)."""
+    parts = case_id.split("/", 3)
+    return f"{parts[0]}/{parts[3]}" if len(parts) == 4 and parts[2] == "passive" else case_id
+
+
 def expectation(data: dict, edition: str) -> str | None:
     """``valid`` / ``invalid`` / ``acceptable`` under ``edition``; None if the case is not part of it."""
     expect = data["expect"]
@@ -30,11 +41,13 @@ def shard_of(case_id: str, shards: int) -> int:
 
 
 def select_cases(cases: list[Case], edition: str, groups=(), globs=(), tags=(),
-                 shard: tuple[int, int] | None = None) -> list[Case]:
-    """The cases of ``edition``, narrowed to these groups, id globs and tags (each when given), and to shard
-    ``(K, N)`` of them."""
+                 shard: tuple[int, int] | None = None, ids: frozenset[str] | None = None) -> list[Case]:
+    """The cases of ``edition``, narrowed to these groups, id globs and tags (each when given), to these ``ids``
+    (when not None) and to shard ``(K, N)`` of them."""
     out = []
     for case in cases:
+        if ids is not None and case.id not in ids:
+            continue
         if shard is not None and shard_of(case.id, shard[1]) != shard[0]:
             continue
         if expectation(case.data, edition) is None:

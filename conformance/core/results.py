@@ -11,8 +11,9 @@ import re
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 
+from .cases import source_case
 from .causes import Cause, cause_from, group_causes, regrouped
-from .verdicts import UNTESTED, Verdict, failing
+from .verdicts import ATTENTION, UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
 VERSION = 5
@@ -56,10 +57,13 @@ class Judgement:
 
 @dataclass
 class Incident:
-    """Something the adapter did that no single case is to blame for, answered by restarting it and replaying.
+    """Something the adapter did that no single case is to blame for, answered by restarting it and replaying; or a
+    live target that stopped sending anything mid-run.
 
-    ``kind``: ``protocol`` (it broke the adapter protocol: the run exits 2) or ``crash`` (it died or
-    stopped answering, yet each request then succeeded alone: the run exits 1). ``cases``: those in flight.
+    ``kind``: ``protocol`` (it broke the adapter protocol: the run exits 2), ``crash`` (it died or
+    stopped answering, yet each request then succeeded alone: the run exits 1) or ``gone`` (a live target stopped
+    sending anything, liveness: what waited on it was decided then, untested; the run exits 1). ``cases``: those in
+    flight, or decided then.
     """
 
     kind: str
@@ -162,10 +166,15 @@ class RunResult:
         counts = Counter(c.verdict.value for c in self.cases)
         return {v.value: counts[v.value] for v in Verdict if counts[v.value]}
 
+    def not_passed(self) -> list[str]:
+        """The ids of the corpus's cases to run again (``run --last-failed``): those that did not pass (a verdict of
+        ``ATTENTION``), a finding filed under another group by the case that made it, in the result's order."""
+        return list(dict.fromkeys(source_case(c.id) for c in self.cases if c.verdict in ATTENTION))
+
     def exit_code(self) -> int:
         """130 if interrupted; else 2 for an adapter error or protocol violation, or when nothing was tested
         (every case INCONCLUSIVE or UNSUPPORTED; a shard of no case tested all it was given); else 1 for a failing
-        verdict, a crash incident or (under --strict) a check kind left untested; else 0."""
+        verdict, a crash or gone incident or (under --strict) a check kind left untested; else 0."""
         if not self.complete:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}

@@ -10,7 +10,7 @@ from collections import Counter, defaultdict
 from dataclasses import replace
 from typing import Callable
 
-from .cases import Case, expectation
+from .cases import Case, expectation, passive_id
 from .causes import cause_of, group_causes
 from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
@@ -27,7 +27,7 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
               errata: str | None = None, waivers: dict[str, Waiver] | None = None, strict: bool = False,
               notes: list[str] | None = None, progress: Callable[[int], None] | None = None,
               options: dict | None = None, clock: Callable[[], float] = time.perf_counter,
-              started: str | None = None, provenance: Provenance | None = None) -> RunResult:
+              started: str | None = None, provenance: Provenance | None = None, exitfirst: bool = False) -> RunResult:
     """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far, every
     ``PROGRESS_EVERY`` answers and at the end).
 
@@ -42,6 +42,9 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     annotate failures (default: the key the adapter's hello declares, if any); ``provenance`` (what the command
     line records of the run) is the result's, with that key.
 
+    ``exitfirst``: the run stops once a case is done and fails (its verdict, or a finding it filed elsewhere): the
+    result holds the cases done by then, with a note naming that case.
+
     The cyclic garbage collector is paused while the run lasts: a run makes little cyclic garbage, and each full
     collection would walk the whole loaded corpus again.
     """
@@ -49,14 +52,14 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     gc.disable()
     try:
         return _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-                    started, provenance)
+                    started, provenance, exitfirst)
     finally:
         if collecting:
             gc.enable()
 
 
 def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-         started, provenance) -> RunResult:
+         started, provenance, exitfirst) -> RunResult:
     started = started or dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = clock()
     hello = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
@@ -78,6 +81,9 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     judges = {c.id: (c.data, kinds[c.kind].judge, []) for c in cases}
     timelines: dict[str, list[dict]] = {}
     answered: list[str] = []  # the case of each job answered (counted if the run is interrupted)
+    waivers = waivers or {}
+    left = Counter(job.case_id for job in jobs) if exitfirst else None  # jobs unanswered, per case
+    stopped_at: list[str] = []  # the failing case the run stopped at (exitfirst)
 
     def judge(job: Job, answer: Answer) -> None:
         data, judge_, found = judges[job.case_id]
@@ -88,29 +94,38 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         else:
             found.append(judged)
         answered.append(job.case_id)
+        if left is not None:
+            left[job.case_id] -= 1
+            if not left[job.case_id] and _fails(found, waivers.get(job.case_id), strict):
+                stopped_at.append(job.case_id)
 
     complete = True
     try:
         for job in jobs:
-            if job.request.op == "skip":
+            if job.request.op == "skip" and not stopped_at:
                 judge(job, Answer("skipped", reason=job.request.params.get("reason", "")))
         live = [job for job in jobs if job.request.op != "skip"]
         done = 0
-        for done, (job, answer) in enumerate(session.run(live), 1):
+        answers = session.run(live if not stopped_at else [])
+        for done, (job, answer) in enumerate(answers, 1):
             judge(job, answer)
             if progress and not done % PROGRESS_EVERY:
                 progress(done)
+            if stopped_at:
+                if hasattr(answers, "close"):  # a generator: what is still in flight is left unanswered
+                    answers.close()
+                break
         if progress:
             progress(done)
     except KeyboardInterrupt:
         complete = False
-    if not complete:
+    if not complete or stopped_at:
         counts = Counter(answered)
         cases = [c for c in cases if plans[c.id] and counts[c.id] == len(plans[c.id])]
-        notes.insert(0, f"interrupted: {len(cases)} of {len(plans)} cases were done; the others are not in this result")
+        notes.insert(0, (f"stopped at the first failing case, {stopped_at[0]}" if complete else "interrupted")
+                     + f": {len(cases)} of {len(plans)} cases were done; the others are not in this result")
     untested, why = hello_gaps(suite, cases, edition, emits, plans)
     notes += why + list(getattr(session, "notes", ()))
-    waivers = waivers or {}
     filed: dict[str, list[CaseResult]] = defaultdict(list)
     for case in cases:
         found = judges[case.id][2]
@@ -118,10 +133,8 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         checks = [r for r in found if r.filed_under is None] if elsewhere else found
         if case.id not in timelines and len(checks) > 1:
             checks = sorted(checks, key=_check_name)
-        verdict = checks[0].verdict if len(checks) == 1 else worst({r.verdict for r in checks})
         waiver = waivers.get(case.id)
-        if waiver is not None:
-            verdict = Verdict.WAIVED if failing(verdict, strict=True) else Verdict.WAIVER_STALE
+        verdict = case_verdict(checks, waiver)
         explained = (suite.implementation_errata(case.id, errata, case.data.get("tags", ()))
                      if failing(verdict, strict=False) else [])
         data = case.data
@@ -129,9 +142,8 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
                                             data["clause"], checks, data.get("rule"), explained,
                                             waiver.reason if waiver else None, timelines.get(case.id, [])))
         for group, passive in (findings_elsewhere(elsewhere, groups).items() if elsewhere else ()):
-            case_id = f"{name}/{group}/passive/{case.id.split('/', 1)[1]}"
-            filed[group].append(CaseResult(case_id, group, worst(r.verdict for r in passive), None,
-                                           passive[0].clause or "", passive))
+            filed[group].append(CaseResult(passive_id(name, group, case.id), group, worst(r.verdict for r in passive),
+                                           None, passive[0].clause or "", passive))
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
                 for g in suite.groups if g.name in filed]
     data = {case.id: case.data for case in cases}
@@ -140,6 +152,22 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
                      round(clock() - began, 3), messages, session.stderr, notes, complete,
                      list(session.incidents), untested, causes=causes,
                      provenance=replace(provenance, errata=errata) if provenance is not None else None)
+
+
+def case_verdict(checks: list[CheckResult], waiver: Waiver | None) -> Verdict:
+    """A case's verdict: its checks' worst, or what a waiver makes of it."""
+    verdict = checks[0].verdict if len(checks) == 1 else worst({r.verdict for r in checks})
+    if waiver is not None:
+        verdict = Verdict.WAIVED if failing(verdict, strict=True) else Verdict.WAIVER_STALE
+    return verdict
+
+
+def _fails(found: list[CheckResult], waiver: Waiver | None, strict: bool) -> bool:
+    """Whether a case that is done fails: by its own checks (as its waiver has them), or by a finding it filed under
+    another group (a case of its own in the result)."""
+    own = [r for r in found if r.filed_under is None]
+    return (bool(own) and failing(case_verdict(own, waiver), strict)) or any(
+        failing(r.verdict, strict) for r in found if r.filed_under is not None)
 
 
 def _check_name(result: CheckResult) -> str:

@@ -26,6 +26,9 @@ SEVERITY = {v: rank for rank, v in enumerate([
     Verdict.CRASH, Verdict.TIMEOUT, Verdict.ADAPTER_ERROR, Verdict.FAIL, Verdict.NON_STRICT,
     Verdict.INCONCLUSIVE, Verdict.IMPL_DEFINED, Verdict.UNSUPPORTED, Verdict.PASS])}
 UNTESTED = (Verdict.INCONCLUSIVE, Verdict.UNSUPPORTED)  # verdicts that say nothing was tested
+# The cases a reader must look at (reports detail them) and a rerun of what did not pass (--last-failed) runs again:
+# every failing verdict, and NON_STRICT and INCONCLUSIVE even when they do not fail the run.
+ATTENTION = (*FAILING, Verdict.NON_STRICT, Verdict.INCONCLUSIVE)
 
 
 def failing(verdict: Verdict, strict: bool) -> bool:

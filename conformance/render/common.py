@@ -8,11 +8,9 @@ import shlex
 
 from ..core.causes import Cause
 from ..core.results import INTERRUPTED, CaseResult, RunResult
-from ..core.verdicts import FAILING, UNTESTED, Verdict
+from ..core.verdicts import ATTENTION, UNTESTED, Verdict
 
 VERDICTS = tuple(Verdict)
-# The cases a report details: every failing verdict, and NON_STRICT and INCONCLUSIVE even when they do not fail the run.
-ATTENTION = (*FAILING, Verdict.NON_STRICT, Verdict.INCONCLUSIVE)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
 
 def overall(result: RunResult) -> str:
@@ -38,11 +36,25 @@ def timeline_lines(case: CaseResult, limit: int = TIMELINE_LIMIT) -> list[str]:
     return lines
 
 
+DECIDING = ("timer", "gone", "received", "acknowledged", "refused")  # timeline events that can decide a step
+
+
+def decided_at(timeline: list[dict]) -> set[int]:
+    """The entries of a timeline (by index) that decided a step: of each step, its last frame taken or, when its
+    bound ran out, its timer (which names the bound)."""
+    last: dict[str, int] = {}
+    for i, e in enumerate(timeline):
+        if e.get("event") in DECIDING and "step" in e:
+            last[e["step"]] = i
+    return set(last.values())
+
+
 def incident_lines(result: RunResult) -> list[str]:
     """One sentence per incident of the run."""
-    return [f"{i.kind} incident: {i.reason}; the adapter was restarted and the {len(i.cases)} case(s) in flight "
-            f"replayed one by one ({', '.join(i.cases[:5])}{', ...' if len(i.cases) > 5 else ''})"
-            for i in result.incidents]
+    return [f"{i.kind} incident: {i.reason}; " + ("the" if i.kind == "gone" else "the adapter was restarted and the")
+            + f" {len(i.cases)} case(s) " + ("waiting on it were decided then, untested" if i.kind == "gone" else
+                                             "in flight replayed one by one")
+            + f" ({', '.join(i.cases[:5])}{', ...' if len(i.cases) > 5 else ''})" for i in result.incidents]
 
 
 def provenance_lines(result: RunResult) -> list[str]:

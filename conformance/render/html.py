@@ -17,7 +17,8 @@ from ..core.results import ByteDiff
 from ..core.verdicts import Verdict
 from ..core.results import FORMAT, CaseResult, RunResult
 from ..escaping import clean
-from .common import TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines, verdict_columns
+from .common import (TIMELINE_LIMIT, attention, cause_numbers, decided_at, errata_text, incident_lines, overall,
+                     provenance_lines, verdict_columns)
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 MAX_DETAILED = 200  # failing cases shown in full
@@ -57,11 +58,18 @@ def render_html(result: RunResult) -> str:
                "cases": [(i, anchors.get(i)) for i in c.cases[:MAX_CAUSE_CASES]]}
               for n, c in enumerate(result.cause_groups(), 1)]
     stderr = clean(result.stderr)
+    others = [{"case": c, **timeline_view(c)} for c in result.cases if c.timeline and c.id not in anchors]
     return environment().get_template("report.html.j2").render(
         result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown, causes=causes,
         incidents=incident_lines(result), provenance=provenance_lines(result), format=FORMAT,
         failing_total=len(failing), first_failure=first, group_tone=GROUP_TONE, stderr=stderr[:MAX_STDERR],
-        stderr_cut=max(0, len(stderr) - MAX_STDERR))
+        stderr_cut=max(0, len(stderr) - MAX_STDERR), timelines=others)
+
+
+def timeline_view(case: CaseResult) -> dict:
+    """A case's timeline as the report shows it: its first entries, which of them decided a step, how many more."""
+    return {"timeline": case.timeline[:TIMELINE_LIMIT], "decided": decided_at(case.timeline[:TIMELINE_LIMIT]),
+            "timeline_cut": max(0, len(case.timeline) - TIMELINE_LIMIT)}
 
 
 def case_view(case: CaseResult, index: int) -> dict:
@@ -71,8 +79,7 @@ def case_view(case: CaseResult, index: int) -> dict:
         if k.expected is not None:
             pairs.setdefault((k.expected, k.actual, k.diffs), []).append(k.check)
     return {"case": case, "anchor": f"case-{index + 1}",
-            "frames": [frame_pair(e, a, d, checks) for (e, a, d), checks in pairs.items()],
-            "timeline": case.timeline[:TIMELINE_LIMIT], "timeline_cut": max(0, len(case.timeline) - TIMELINE_LIMIT)}
+            "frames": [frame_pair(e, a, d, checks) for (e, a, d), checks in pairs.items()], **timeline_view(case)}
 
 
 def frame_pair(expected: str, actual: str | None, diffs: tuple[ByteDiff, ...], checks: list[str]) -> dict:

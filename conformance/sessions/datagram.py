@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Iterable, Iterator, Protocol
 
 from ..capture.recording import OWN, RECEIVED
+from ..core.results import Incident
 from ..core.session import Answer, Job
 from ..kinds.scenario import Addressing, Conductor
 
@@ -64,9 +65,11 @@ class Peer(Protocol):
     def impostor(self, parsed) -> str | None:
         """Why something that arrived shows another system using the session's identity on the link, or None."""
 
+    def gone(self, t: float) -> str | None:
+        """(optional) Why the target is taken for gone at ``t`` (liveness: it stopped sending anything), or None."""
+
 
 class DatagramSession:
-    incidents: tuple = ()
     stderr = ""
 
     def __init__(self, transport: Transport, peer: Peer, wire, hello: dict, startup: float, restart=None,
@@ -84,6 +87,8 @@ class DatagramSession:
         self.unsent: list[str] = []  # why the session's own datagrams (announce, heartbeat) could not be sent
         self.drops = 0  # datagrams the transport lost before the session read them
         self.impostors: list[str] = []  # evidence that another system uses the session's identity
+        self.gone: str | None = None  # why the target is taken for gone now (the peer's liveness), or None
+        self.incidents: list[Incident] = []  # each time it was, with the cases decided then
         self.conductor: Conductor | None = None
 
     def hello(self) -> dict:
@@ -104,10 +109,13 @@ class DatagramSession:
                                                           getattr(self.peer, "other", None),
                                                           getattr(self.peer, "stranger", None)), self.transport.epoch,
                                                first_unique=self.first_unique)
-        self._transmit(conductor.start(self.transport.now()))
+        self.began = self.transport.now()
+        self._transmit(conductor.start(self.began))
         while True:
             while conductor.finished:
                 job, record = conductor.finished.pop(0)
+                if self.incidents and any(e.get("event") == "gone" for e in record.get("timeline", ())):
+                    self.incidents[-1].cases.append(job.case_id)
                 yield job, Answer("ok", message=record)
             if conductor.done:
                 return
@@ -161,8 +169,21 @@ class DatagramSession:
             if not self.heard:
                 conductor.impaired(t, f"nothing has come from {self.name} yet (is the address right?)")
         if conductor is not None:
+            self._liveness(t, conductor)
             self._transmit(conductor.wake(t))
         self._send(self.peer.due(t))
+
+    def _liveness(self, t: float, conductor: Conductor) -> None:
+        """Tell the scenarios when the target is gone (the peer says why), so that what waits on it is decided then
+        instead of at each bound; and when it is back."""
+        gone = getattr(self.peer, "gone", None)
+        why = gone(t) if gone is not None else None
+        if (why is None) == (self.gone is None):
+            return
+        self.gone = why
+        if why is not None:
+            self.incidents.append(Incident("gone", f"at {t - self.began:.1f} s of the run, {why}", []))
+        self._transmit(conductor.absent(t, why))
 
     def _losses(self, t: float, conductor: Conductor | None, poll: bool) -> None:
         """Tell the scenarios of datagrams the transport lost since it last said."""

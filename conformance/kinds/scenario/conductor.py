@@ -1,7 +1,8 @@
 """Run many scenario machines against one target at once, sans-IO.
 
 Scenarios that share a resource (declared, or a message they wait for) run one after another; the others
-run together, so a set costs about its longest chain, not its sum. A program may be ``exclusive`` (it runs
+run together, so a set costs about its longest chain, not its sum. While the target is gone (``absent``: the
+session's liveness), what each scenario waits for is decided at once rather than at each bound. A program may be ``exclusive`` (it runs
 alone: the robustness phase floods the target) and may belong to a ``batch`` (programs of one batch share
 one machine: the robustness phase probes every request kind after each block of frames it sends). What
 arrives is parsed once and routed: a reply that echoes a value a scenario's request carried (a request id,
@@ -54,6 +55,7 @@ class Conductor:
         self._released: set[int] = set()  # machines seen to have released their resources
         self.impostors: list[str] = []  # replies that answer requests this run never sent
         self.lasting: list[str] = []  # impairments every machine started from now on is told of
+        self.gone: str | None = None  # why the target is taken for gone (liveness), or None
 
     @property
     def done(self) -> bool:
@@ -102,6 +104,8 @@ class Conductor:
             for why in self.lasting:
                 machine.impaired(t, why, lasting=True)
             out += self._sent(job, machine, machine.start(t, self.epoch(t)))
+            if self.gone is not None and hasattr(machine, "gone"):
+                out += self._sent(job, machine, machine.gone(t, self.epoch(t), self.gone))
             if getattr(program, "exclusive", False):
                 break
         return out + self._reap(t)
@@ -161,6 +165,17 @@ class Conductor:
             self.lasting.append(why)
         for machine in self.running.values():
             machine.impaired(t, why, lasting)
+
+    def absent(self, t: float, why: str | None) -> list[Outgoing]:
+        """The target is gone (``why``: the session's liveness says so), or back (None): while it is gone, what every
+        scenario waits for is decided at once (machines that can be told), not at the end of each bound."""
+        self.gone = why
+        out = []
+        if why is not None:
+            for job, machine in list(self.running.items()):
+                if hasattr(machine, "gone"):
+                    out += self._sent(job, machine, machine.gone(t, self.epoch(t), why))
+        return out + self._reap(t)
 
     def undeliverable(self, t: float, job, why: str) -> list[Outgoing]:
         """What a job's machine sent could not be sent (``why``): it stops, unable to run (INCONCLUSIVE)."""

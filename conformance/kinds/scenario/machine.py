@@ -239,6 +239,18 @@ class Machine:
         self._expire(t, step)
         return self._advance(t, epoch)
 
+    def gone(self, t: float, epoch: float, why: str) -> list[Composed]:
+        """The target is gone (``why``): each step left that waits is decided now, not at its bound, as a step that
+        could not see what it waited for (a failure for want of a frame is INCONCLUSIVE, a silence is not judged)."""
+        if self.done:
+            return []
+        self.impaired(t, why)
+        out: list[Composed] = []
+        while not self.done and self.step is not None and self.step.until is not None:
+            self._expire(t, self.step, gone=why)
+            out += self._advance(t, epoch)
+        return out
+
     # ------------------------------------------------------------------ stepping
 
     def _advance(self, t: float, epoch: float) -> list[Composed]:
@@ -607,19 +619,23 @@ class Machine:
         step.until = None
         return self._advance(t, epoch)
 
-    def _expire(self, t: float, step: _Step) -> None:
-        """The step's time is up: judge what it gathered."""
+    def _expire(self, t: float, step: _Step, gone: str | None = None) -> None:
+        """The step's time is up (or, ``gone``, the target is: it is decided before its bound): judge what it
+        gathered."""
         spec, kind = step.spec, step.kind
         bound = f"{self._seconds(_length(spec)):g}"
         if kind == "wait":
             pass
+        elif kind == "silence" and gone is not None and not step.replies:
+            self._find(step, "", False, f"{spec['silence']} not awaited for {bound} s", blind=gone)
         elif kind == "silence":
             got = len(step.replies)
             self._find(step, "", got == 0, f"nothing for {bound} s" if not got else f"{got} {spec['silence']} received")
         elif kind == "sequence":
             self._judge_sequence(step, bound)
         elif kind == "accepted":
-            self._find(step, "", False, f"step {spec['accepted']}'s call was not acknowledged within {bound} s")
+            self._find(step, "", False, f"step {spec['accepted']}'s call was not acknowledged within {bound} s",
+                       blind=gone)
         else:
             wanted = spec.get("expect") or spec.get("alive") or "a frame"
             got = len(step.replies)
@@ -631,7 +647,23 @@ class Machine:
             what = f"{what} within {bound} s{tries}{malformed}{refused}{_unmatched(step)}"
             if got or not self._silence_allowed(step, what):
                 self._find(step, "", False, what, blind=self._blind(step))
-        self.timeline.append({"t": self._rel(t), "event": "timer", "step": spec["id"], "note": "the step's time is up"})
+        self.timeline.append(self._timer(t, step) if gone is None else
+                             {"t": self._rel(t), "event": "gone", "step": spec["id"],
+                              "note": f"decided before its {bound} s bound ran out: the target is gone"})
+
+    def _timer(self, t: float, step: _Step) -> dict:
+        """The timeline entry of a step whose time is up, saying which of its bounds decided it: the time it is given
+        (``within``, ``for``, ``wait``) or the quiet period after a terminal state, in seconds of the run, with the
+        suite's name for it and the tries made."""
+        spec = step.spec
+        quiet = step.terminal is not None and step.bound is not None and step.until != step.bound
+        key = "quiet" if quiet else next(k for k in ("within", "for", "wait") if k in spec)
+        value = spec.get("quiet", 1.0) if quiet else spec[key]
+        bound = {"of": key, "seconds": self._bound(value)} | ({"name": value} if isinstance(value, str) else {})
+        tries = f", after {step.tries} tries" if step.tries > 1 else ""
+        return {"t": self._rel(t), "event": "timer", "step": spec["id"], "bound": bound,
+                "note": f"the step's time is up: its {key} bound, {bound['seconds']:g} s"
+                        + (f" ({value})" if isinstance(value, str) else "") + f", ran out{tries}"}
 
     def _judge_sequence(self, step: _Step, bound) -> None:
         spec = step.spec

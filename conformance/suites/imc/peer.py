@@ -6,6 +6,10 @@ it arrived (at once when its id is given: the seeds do not make Heartbeat period
 a second system (``other``, named ``<name>-2``, on the same socket), the second client that scenarios about two
 clients on the link and about forwarding speak as.
 
+It tells when the node is gone (liveness): a node that has been sending Heartbeats and then sends nothing at all for
+five times its longest gap between them (at least 5 s) has stopped, and the scenarios waiting on it need not each
+wait out its bound (the session decides them then, untested). A node that never heart-beats is never taken for gone.
+
 It also says which frames are for the session: replies are matched on the header, not on the socket they
 arrive at, because a node like DUNE sends what its UDP transport lists to every contact. Frames the session
 itself sent (echoed back) and frames addressed to another system (the node's own internal messages) are not
@@ -23,6 +27,7 @@ DISCOVERY_PORTS = range(30100, 30105)
 DEFAULT_SYSTEM = 0x4CF0  # the session's IMC id in tests and in recordings made before ids were chosen per run
 SYSTEMS = range(0x4C01, 0x4CFF)  # the ids a run chooses from: outside DUNE's and Neptus' usual ranges
 ANNOUNCE_EVERY, HEARTBEAT_EVERY = 10.0, 1.0
+GONE_AFTER_BEATS, GONE_AFTER_GAPS, GONE_AT_LEAST = 3, 5.0, 5.0  # liveness: Heartbeats seen first; silence, in gaps
 
 
 def session_system(src: int | None, first_unique: int | None) -> int:
@@ -56,6 +61,9 @@ class ImcPeer:
         self.given = node is not None
         self.ready = self.given
         self.next_beat = self.next_announce = None
+        self.heard_at: float | None = None  # the latest valid frame from the node
+        self.beats: list[float] = []  # when its Heartbeats came (the first few, and the latest)
+        self.gap = 0.0  # the longest time between two of its Heartbeats
 
     @property
     def deadline(self) -> float | None:
@@ -65,6 +73,7 @@ class ImcPeer:
         """Introduce the session (again, after the target restarted): it is ready once the target shows itself."""
         self.ready = self.given
         self.next_beat, self.next_announce = t + HEARTBEAT_EVERY, t + ANNOUNCE_EVERY
+        self.heard_at, self.beats, self.gap = None, [], 0.0  # a restarted node shows its rhythm again
         return self._announcements(t) + [(None, self._heartbeat(t))]
 
     def due(self, t: float) -> list[tuple[object, bytes]]:
@@ -118,6 +127,21 @@ class ImcPeer:
             self.node = src
         if src == self.node:
             self.ready = True
+            self.heard_at = t
+            if parsed.message == "Heartbeat":
+                if self.beats:
+                    self.gap = max(self.gap, t - self.beats[-1])
+                self.beats = self.beats[:GONE_AFTER_BEATS] + [t]
+
+    def gone(self, t: float) -> str | None:
+        """Why the node is taken for gone at ``t`` (it heart-beat, then stopped sending anything), or None."""
+        if len(self.beats) < GONE_AFTER_BEATS or self.heard_at is None:
+            return None
+        silent = t - self.heard_at
+        if silent < max(GONE_AT_LEAST, GONE_AFTER_GAPS * self.gap):
+            return None
+        return (f"the node has sent nothing for {silent:.1f} s, after Heartbeats at most {self.gap:.1f} s apart: it is "
+                "taken for gone (liveness), and what waited on it was decided then, untested")
 
     def _announce(self, t: float, second: bool = False) -> bytes:
         """The Announce of the session's system, or of its second: under its own name (DUNE keeps contacts by
