@@ -90,6 +90,23 @@ def chosen_edition(suite, given: str | None) -> str:
     return edition
 
 
+def known_groups(suite, wanted, known) -> None:
+    """A usage error naming each of the ``wanted`` messages (``--message``) that is not among ``known``."""
+    from .errors import UsageError
+
+    unknown = set(wanted) - set(known)
+    if unknown:
+        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+
+
+def window(start: float | None, end: float | None) -> None:
+    """A usage error where ``--end`` comes before ``--start`` (seconds into a capture or a log)."""
+    from .errors import UsageError
+
+    if start is not None and end is not None and end < start:
+        raise UsageError(f"--end {end:g} is before --start {start:g}")
+
+
 def shard(text: str) -> tuple[int, int]:
     """K/N: the Kth of N shards (1 <= K <= N, N >= 2)."""
     k, sep, n = text.partition("/")

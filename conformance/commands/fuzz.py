@@ -71,7 +71,7 @@ def command(args) -> int:
     from ..render.terminal import print_result
     from ..core.hello import check_hello
     from .adapters import adapter_arguments, builtin_argv, open_session, split_command
-    from ..arguments import chosen_edition
+    from ..arguments import chosen_edition, known_groups
     from .output import report_targets, terminal, write_reports
     from .provenance import provenance
 
@@ -84,9 +84,7 @@ def command(args) -> int:
     adapter_arguments(args)
     suite, everything = open_corpus(args.suite, None, None if args.target else frozenset(args.message) or None)
     edition = chosen_edition(suite, args.edition)
-    unknown = set(args.message) - {g.name for g in suite.groups}
-    if unknown:
-        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    known_groups(suite, args.message, [g.name for g in suite.groups])
     try:
         source = suite.fuzz_source(edition, everything)
     except ValueError as exc:

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from ..errors import UsageError
-from ..arguments import address, offset_seconds
+from ..arguments import address, known_groups, offset_seconds, window
 from .options import add_judging, add_reports
 
 
@@ -45,8 +45,7 @@ def command(args) -> int:
     from .provenance import provenance
 
     targets = report_targets(args)
-    if args.start is not None and args.end is not None and args.end < args.start:
-        raise UsageError(f"--end {args.end:g} is before --start {args.start:g}")
+    window(args.start, args.end)
     logs = [_opened(Path(p)) for p in args.files]
     try:
         suite, reader, notes, damage = _reader(args, logs)
@@ -123,9 +122,7 @@ def _reader(args, logs):
     if args.edition is not None:
         chosen_edition(suite, args.edition)
     reader = _log_reader(suite, args.edition)
-    unknown = set(args.message) - set(reader.rules.keys)
-    if unknown:
-        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    known_groups(suite, args.message, reader.rules.keys)
     return suite, reader, notes, damage
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..errors import UsageError
 from ..limits import PIPE_LIMIT
-from ..arguments import address, count, offset_seconds
+from ..arguments import address, chosen_edition, count, known_groups, offset_seconds, window
 from .options import add_adapter, add_judging, add_reports
 
 
@@ -43,12 +43,8 @@ def capture_rules(args):
         rules = suite.capture_rules()
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
-    edition = args.edition or suite.editions[0]
-    if edition not in suite.editions:
-        raise UsageError(f"unknown edition {edition!r} (editions: {', '.join(suite.editions)})")
-    unknown = set(args.message) - set(rules.keys)
-    if unknown:
-        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    edition = chosen_edition(suite, args.edition)
+    known_groups(suite, args.message, rules.keys)
     return suite, rules, edition
 
 
@@ -58,8 +54,7 @@ def command(args) -> int:
 
     targets = report_targets(args)
     suite, rules, edition = capture_rules(args)
-    if args.start is not None and args.end is not None and args.end < args.start:
-        raise UsageError(f"--end {args.end:g} is before --start {args.start:g}")
+    window(args.start, args.end)
     selection = Selection(frozenset(args.port) or None, frozenset(args.message), args.src, args.dst, args.host,
                           args.start, args.end, args.list_frames, args.time_scale)
     judge = CaptureJudge(suite.name, rules, edition, selection)

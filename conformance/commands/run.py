@@ -52,6 +52,7 @@ def selection(args, rerun: frozenset[str] | None = None):
     names; only those of ``rerun`` when given) and how many the selection holds in all shards. Only the files of
     the selected messages are read (``--message``, an id glob naming one, or the cases to rerun) unless the run
     needs the whole corpus (waivers name any case; the robustness phase replays every frame)."""
+    from ..arguments import known_groups
     from ..core.cases import select_cases
     from ..files import open_corpus
 
@@ -61,9 +62,7 @@ def selection(args, rerun: frozenset[str] | None = None):
     if args.edition not in suite.editions:
         raise UsageError(f"unknown edition {args.edition!r} of the suite {suite.name!r} "
                          f"(editions: {', '.join(suite.editions)})")
-    unknown = set(args.message) - {g.name for g in suite.groups}
-    if unknown:
-        raise UsageError(f"unknown {suite.group_label}(s): {', '.join(sorted(unknown))}")
+    known_groups(suite, args.message, [g.name for g in suite.groups])
     chosen = select_cases(everything, args.edition, args.message, args.id, args.tag, ids=rerun)
     return suite, everything, select_cases(chosen, args.edition, shard=args.shard), len(chosen)
 
