@@ -79,3 +79,38 @@ def test_encode_failures_name_the_differing_field():
     assert result.verdict is Verdict.FAIL
     assert [(d.start, d.end, d.field) for d in result.diffs][0] == (23, 24, "LblRange.range")
     assert "first difference at byte 23 = LblRange.range (bytes 21-24)" in result.detail
+
+
+def _read_text(value, codec: str, as_hex: bool):
+    """A decoded message with every {"hex"} text read by a reader using ``codec`` ("utf-8" replacing undecodable
+    bytes with U+FFFD: a lossy reader; "latin-1": a wrong one), answered as a JSON string or as {"hex"} of the text's
+    UTF-8 bytes."""
+    if isinstance(value, dict) and set(value) == {"hex"}:
+        text = bytes.fromhex(value["hex"]).decode(codec, "replace")
+        return {"hex": text.encode("utf-8").hex()} if as_hex else text
+    if isinstance(value, dict):
+        return {k: _read_text(v, codec, as_hex) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_read_text(v, codec, as_hex) for v in value]
+    return value
+
+
+def test_lossy_text_gets_one_verdict_whether_answered_as_a_string_or_as_hex():
+    """The contract makes a string and {"hex"} of its UTF-8 bytes equal: a reader replacing undecodable text bytes
+    is lossy (IMPL_DEFINED) in either form, in both suites, and a Latin-1 reader FAILs in either form."""
+    ros, ros_cases = open_corpus("ros_acomms")
+    judged = 0
+    for kind, edition, cases in ((KIND, EDITION, CASES),
+                                 (ros.kinds["vector"], ros.editions[0], [c.data for c in ros_cases if c.kind == "vector"])):
+        lossy = [c for c in cases if c.get("expect") == "acceptable" and "lossy" in {o["outcome"] for o in c["outcomes"]}
+                 and _read_text(c["message"], "utf-8", False) != c["message"]]
+        for case in lossy:
+            request = next(r for r in kind.plan(case, edition, set()) if r.op == "decode")
+            for codec, verdict in (("utf-8", Verdict.IMPL_DEFINED), ("latin-1", Verdict.FAIL)):
+                answers = [_read_text(case["message"], codec, as_hex) for as_hex in (False, True)]
+                if codec == "latin-1" and answers[0] == _read_text(case["message"], "utf-8", False):
+                    continue  # bytes Latin-1 and UTF-8 read alike
+                verdicts = [kind.judge(case, edition, request, Answer("ok", message=m)).verdict for m in answers]
+                assert verdicts == [verdict, verdict], (case["id"], codec, verdicts)
+            judged += 1
+    assert judged >= 20, judged

@@ -13,6 +13,16 @@ MAX_BYTES = 4096  # beyond this, only the exact bytes (the search is quadratic i
 MAX_SEQUENCE = 4  # the most bytes one replacement character stands for (a UTF-8 sequence)
 
 
+def lossy_bytes(raw: bytes, answered: bytes) -> bool:
+    """Whether ``answered`` (the bytes an answer stands for, whatever its form: a string's UTF-8, ``{"hex"}``'s bytes)
+    is ``raw`` read lossily: one verdict for one reading, however the adapter wrote it."""
+    try:
+        text = answered.decode("utf-8")
+    except UnicodeDecodeError:  # a lossy reader's text is text: bytes that are not UTF-8 are another reading
+        return False
+    return lossy_match(raw, text)
+
+
 def lossy_match(raw: bytes, text: str) -> bool:
     """Whether ``text`` is ``raw`` read as described above (iterative: no recursion the input can drive)."""
     if len(raw) > MAX_BYTES or len(text) > MAX_BYTES:

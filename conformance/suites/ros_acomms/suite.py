@@ -9,7 +9,7 @@ from pathlib import Path
 from ...core.suite import BuiltinAdapter, Group
 from ...paths import VECTORS
 from . import codec, forms
-from ...kinds.vector.texts import lossy_match
+from ...kinds.vector.texts import lossy_bytes
 from .definitions import DefinitionError, RosDefinitions, load_definitions, parse_definitions
 from .msgtext import expected_types, parse_full_text, text_differences
 from ..data_suite import DataSuite, read_data_file
@@ -63,10 +63,11 @@ class RosCodec:
         return codec.decode(self.defs.edition(edition), case["type"], frame)
 
     def tolerates(self, outcome: str, op: str, difference) -> bool:
-        """lossy (decoding, or a roundtrip): a string whose bytes that are not UTF-8 were replaced (texts.lossy_match)."""
-        if outcome == "lossy" and op != "encode" and difference.why == "string" and isinstance(difference.actual, str):
+        """lossy (decoding, or a roundtrip): a string whose bytes that are not UTF-8 were replaced (texts.lossy_bytes, on the
+        bytes the answer stands for, string or {"hex"})."""
+        if outcome == "lossy" and op != "encode" and difference.why == "string":
             try:
-                return lossy_match(codec.string_bytes(difference.expected), difference.actual)
+                return lossy_bytes(codec.string_bytes(difference.expected), codec.string_bytes(difference.actual))
             except ValueError:
                 return False
         return False
