@@ -18,6 +18,7 @@ import struct
 import sys
 from pathlib import Path
 
+import yaml  # noqa: F401  genpy (and its generators, run with this interpreter) need it: the ros extra's pyyaml
 from imc_conformance.adapter_api import Rejected, Unsupported
 from imc_conformance.native import debian_packages, run
 from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import sys
 
 import pytest
 
@@ -161,3 +162,15 @@ def test_a_custom_vector_directory_runs(tmp_path, capsys):
     (tmp_path / "200-LblRange.json").write_text(imc_data("cases", "200-LblRange.json").read_text())
     assert run("--vectors", str(tmp_path)) == 0
     assert f"{lblrange_cases()} cases" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name, module", [("rosbags", "numpy"), ("genpy", "yaml")])
+def test_a_built_in_adapter_without_its_extra_names_the_extra(name, module, monkeypatch, capsys):
+    """A wheel installed without the ros extra: the module the adapter needs is missing (simulated: the import of it
+    fails), and the one line says what to install, exit 2."""
+    monkeypatch.setitem(sys.modules, module, None)  # `import numpy` now raises ModuleNotFoundError
+    monkeypatch.delitem(sys.modules, f"imc_conformance.adapters.{name}_adapter", raising=False)
+    code = main(["run", "--suite", "ros_acomms", "--adapter", name, "--message", "CST"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert f"adapter '{name}' needs the 'ros' extra: pip install 'imc-conformance[ros]'" in err[0], err

@@ -32,6 +32,9 @@ def load_library_adapter(spec: str, suite, arguments: dict[str, str] | None = No
         target_ = getattr(module, attr)
     except UsageError:
         raise
+    except ModuleNotFoundError as exc:
+        raise missing_extra(builtin, exc) or UsageError(f"cannot load adapter {spec!r}: {type(exc).__name__}: {exc}") \
+            from exc
     except Exception as exc:
         raise UsageError(f"cannot load adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
     if hasattr(target_, "decode") and not inspect.isclass(target_):
@@ -43,8 +46,18 @@ def load_library_adapter(spec: str, suite, arguments: dict[str, str] | None = No
                          "a class or a factory")
     try:  # a class or a factory
         return target_(**(arguments or {}))
+    except ModuleNotFoundError as exc:  # a module imported on first use
+        raise missing_extra(builtin, exc) or UsageError(f"cannot create the adapter {spec!r}: {exc}") from exc
     except Exception as exc:
         raise UsageError(f"cannot create the adapter {spec!r}: {type(exc).__name__}: {exc}") from exc
+
+
+def missing_extra(builtin, exc: ModuleNotFoundError) -> UsageError | None:
+    """The one line naming the pip extra a built-in adapter needs, when a module of that extra is what is missing."""
+    if builtin is None or not builtin.extra or (exc.name or "imc_conformance").startswith("imc_conformance"):
+        return None
+    return UsageError(f"adapter {builtin.name!r} needs the {builtin.extra!r} extra: pip install "
+                      f"'imc-conformance[{builtin.extra}]' (missing module: {exc.name})")
 
 
 def adapter_choice(args, suite) -> tuple[str, list[str] | None]:

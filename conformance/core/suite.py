@@ -49,6 +49,7 @@ class BuiltinAdapter:
     library: str | None = None
     argv: Callable[..., list[str]] | None = None  # keyword arguments: the --adapter-arg NAME=VALUE it takes
     help: str = ""
+    extra: str | None = None  # the package's optional dependencies (pip extra) a library adapter needs
 
 
 class Suite(ABC):

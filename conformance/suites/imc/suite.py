@@ -107,9 +107,9 @@ class ImcSuite(DataSuite):
     def adapters(self) -> dict[str, BuiltinAdapter]:
         return {
             "imcpy": BuiltinAdapter("imcpy", library=f"{ADAPTERS_PACKAGE}.imcpy_adapter:adapter",
-                                    help="imcpy, DUNE's C++ codec (library)"),
+                                    extra="imcpy", help="imcpy, DUNE's C++ codec (library)"),
             "pyimclsts": BuiltinAdapter("pyimclsts", library=f"{ADAPTERS_PACKAGE}.pyimclsts_adapter:adapter",
-                                        help="pyimclsts (library)"),
+                                        extra="pyimclsts", help="pyimclsts (library)"),
             "imcpy-shim": BuiltinAdapter("imcpy-shim", argv=lambda: shim_argv("imcpy_shim.py") + [
                 "--definitions", str(self.packaged / "definitions.json")], help="imcpy through the subprocess protocol"),
             "pyimclsts-shim": BuiltinAdapter("pyimclsts-shim", argv=pyimclsts_shim_argv,

@@ -113,9 +113,9 @@ class RosSuite(DataSuite):
     def adapters(self) -> dict[str, BuiltinAdapter]:
         return {
             "rosbags": BuiltinAdapter("rosbags", library=f"{ADAPTERS_PACKAGE}.rosbags_adapter:RosbagsAdapter",
-                                      help="rosbags (library; --adapter-arg edition=E or msgs=DIR)"),
+                                      extra="ros", help="rosbags (library; --adapter-arg edition=E or msgs=DIR)"),
             "genpy": BuiltinAdapter("genpy", library=f"{ADAPTERS_PACKAGE}.genpy_adapter:GenpyAdapter",
-                                    help="genpy from Debian (library; --adapter-arg edition=E or msgs=DIR)"),
+                                    extra="ros", help="genpy from Debian (library; --adapter-arg edition=E or msgs=DIR)"),
             "roscpp": BuiltinAdapter("roscpp", argv=roscpp_argv,
                                      help="roscpp's serialization in C++ (subprocess, built on first use; --adapter-arg "
                                           "edition=E or msgs=DIR)"),
