@@ -87,3 +87,30 @@ def test_an_adapter_that_cannot_start_is_explained(capsys, tmp_path):
 ])
 def test_value_mistakes_are_told_apart(expected, actual, code):
     assert value_mistake(expected, actual) == code
+
+
+def test_an_implementation_canonicalising_nan_on_encode_is_its_own_result(capsys):
+    """The frame alone cannot tell an implementation that canonicalises a NaN's bits from an adapter that lost them:
+    both readings are shown with how to tell, and the honest adapter passes."""
+    status, out = check(capsys, "--adapter", f"{Path(__file__).resolve().parent / 'nan_canonical_adapter.py'}:Adapter")
+    assert status == 0 and "MISTAKE" not in out, out
+    assert ("encode-le of imc/Announce/boundary/height/nan-payload: Announce.height: the request gave "
+            "'nan:7fc00001', the frame holds 'nan'") in out
+    assert "either the implementation writes these values so" in out and "or the adapter changed the value" in out
+    assert "the adapter decoded the same probes right" in out
+
+
+def test_an_adapter_that_implements_nothing_yet_is_told_so(capsys):
+    status, out = check(capsys, *wrong("nothing"))
+    assert status == 0 and "MISTAKE" not in out, out
+    assert 'every probe was answered "unsupported": the adapter speaks the contract but implements nothing yet' in out
+
+
+@pytest.mark.parametrize("command", [["run"], ["fuzz", "--budget", "5"]])
+def test_run_and_fuzz_of_an_adapter_implementing_nothing_exit_2_saying_so(command, capsys):
+    capsys.readouterr()
+    code = main([*command, *wrong("nothing"), "--message", "LblRange"])
+    out, err = capsys.readouterr()
+    assert code == 2, out + err
+    assert "UNSUPPORTED" in out and "PASS" not in out.split("cases in")[-1] and "agrees" not in out, out
+    assert 'imc-conformance: nothing could be tested: ' in err and '"unsupported"' in err and len(err.strip().splitlines()) == 1, err

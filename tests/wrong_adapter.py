@@ -7,7 +7,8 @@ written with the bits of the double it was widened to), ``missing-header`` (deco
 ``header-required`` (fails on an encode request whose header lacks a field), ``out-of-order-batch`` (answers a batch
 with the right ids in the wrong places), ``no-name`` (a hello without implementation), ``unflushed`` (stdout never
 flushed until the end), ``log-on-stdout`` (a log line among the answers), ``unknown-op`` (an unknown op answered as
-an adapter failure), ``internal-on-accept`` (an accepted frame of an unknown id answered as an adapter failure).
+an adapter failure), ``internal-on-accept`` (an accepted frame of an unknown id answered as an adapter failure),
+``nothing`` (an unmodified starter: every request but hello answered unsupported; no mistake, nothing implemented).
 """
 
 from __future__ import annotations
@@ -40,6 +41,8 @@ def widened(value):
 
 
 def answer(request: dict) -> dict:
+    if MODE == "nothing" and request.get("op") != "hello":
+        return {"id": request["id"], "ok": False, "unsupported": True, "error": "not implemented yet"}
     if MODE == "unknown-op" and request.get("op") not in ("hello", "encode", "decode"):
         return {"id": request["id"], "ok": False, "internal": True, "error": f"KeyError: {request.get('op')!r}"}
     if MODE == "header-required" and request.get("op") == "encode" and len(request["message"].get("header", {})) < 5:

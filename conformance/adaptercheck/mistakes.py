@@ -90,9 +90,6 @@ CATALOGUE = {
                      "an f32 or f64, C printf(\"%.9g\") for a float and \"%.17g\" for a double)"),
     "value": ("a probe was decoded with another value",
               "if the implementation reads the frame right, the adapter's conversion to the decoded form is wrong"),
-    "encode-value": ("a probe's message was encoded to another frame",
-                     "read the decoded form's values exactly: -0.0 keeps its sign, \"nan:<hex>\" is the bit "
-                     "pattern, \"inf\" and \"-inf\" are the infinities, fp32 fields are parsed as 32-bit floats"),
 }
 
 

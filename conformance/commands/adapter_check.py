@@ -45,6 +45,12 @@ def command(args) -> int:
         print(f"  ok    {printable(line)}")
     for finding in outcome.findings:
         print(f"  note  {printable(finding)[:400]} (the implementation's own result: a run judges it)")
+    if outcome.either:
+        either(outcome)
+    if outcome.nothing:
+        print("  note  every probe was answered \"unsupported\": the adapter speaks the contract but implements "
+              "nothing yet (put the implementation's calls where the starter says TODO); a run of it tests nothing "
+              "and exits 2")
     kinds = outcome.by_kind()
     for n, same in enumerate(kinds, 1):
         print(f"MISTAKE {n}: {same[0].what}" + (f" ({len(same)} times)" if len(same) > 1 else ""))
@@ -59,3 +65,22 @@ def command(args) -> int:
         return 1
     print(f"the adapter speaks the contract ({README}); next: imc-conformance run with the same options")
     return 0
+
+
+def either(outcome) -> None:
+    """Encode probes whose frame holds another value than the request gave: both readings, and how to tell them."""
+    from ..escaping import printable
+
+    for line in outcome.either[:SHOWN]:
+        print(f"  note  {printable(line)[:400]}")
+    if len(outcome.either) > SHOWN:
+        print(f"        … and {len(outcome.either) - SHOWN} more like these")
+    print("        either the implementation writes these values so (e.g. it canonicalises a NaN's bits when it writes "
+          "a float): its own result, which a run judges (a FAIL of those encode checks, not the adapter's)")
+    print("        or the adapter changed the value before handing it over (a \"nan:<hex>\" read as a plain NaN, an "
+          "fp32 read as a double, -0.0 read as 0): its mistake")
+    decoded = ("the adapter decoded the same probes right, so it writes these values right; " if outcome.decoded_right
+               else "")
+    print(f"        to tell: {decoded}log the value the adapter hands the implementation (on stderr), or check its "
+          "value parser alone (the starters' --values reads value probes and answers them without the "
+          "implementation): if the value is right when handed over, the frame is the implementation's")

@@ -72,7 +72,7 @@ def command(args) -> int:
     from ..core.hello import check_hello
     from .adapters import adapter_arguments, builtin_argv, open_session, split_command
     from ..arguments import chosen_edition, known_groups
-    from .output import report_targets, terminal, write_reports
+    from .output import report_targets, say_untested, terminal, write_reports
     from .provenance import provenance
 
     targets = report_targets(args)
@@ -155,7 +155,8 @@ def command(args) -> int:
                       "imc-conformance generate makes them vectors", highlight=False, markup=False)
     if tally.stopped == "interrupted":
         return 130
-    return 2 if problems else (1 if unexplained(tally) else 0)
+    say_untested(result)
+    return 2 if problems or result.nothing_tested() else (1 if unexplained(tally) else 0)
 
 
 
@@ -170,7 +171,7 @@ def live_fuzz(args, suite, everything, source, groups, edition, targets) -> int:
     from ..core.runner import run_cases
     from ..fuzz.engine import mutated_cases
     from ..render.terminal import print_result
-    from .output import terminal, write_reports
+    from .output import say_untested, terminal, write_reports
     from .provenance import provenance
 
     if args.adapter or args.adapter_cmd:
@@ -207,6 +208,7 @@ def live_fuzz(args, suite, everything, source, groups, edition, targets) -> int:
     console = terminal()
     print_result(result, console)
     problems = write_reports(result, targets, console)
+    say_untested(result)
     return 2 if problems else result.exit_code()
 
 

@@ -65,4 +65,12 @@ def finish(result, targets: dict[str, Path], damage: list[str], complete: bool) 
         print(f"imc-conformance: {printable(line)}", file=sys.stderr)
     if not complete:
         return result.exit_code()
+    say_untested(result)
     return 2 if problems or damage else result.exit_code()
+
+
+def say_untested(result) -> None:
+    """The one line (on stderr) of a result in which nothing could be tested, why, and that it exits 2."""
+    line = result.nothing_tested()
+    if line is not None:
+        print(f"imc-conformance: {printable(line)}; exit 2", file=sys.stderr)

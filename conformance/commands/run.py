@@ -91,7 +91,7 @@ def command(args) -> int:
     from ..files import load_waivers
     from ..render.terminal import print_result
     from .adapters import adapter_choice, open_session
-    from .output import report_targets, terminal, write_file, write_reports
+    from .output import report_targets, say_untested, terminal, write_file, write_reports
     from .provenance import provenance
 
     targets = report_targets(args)
@@ -170,6 +170,7 @@ def command(args) -> int:
     if not result.complete:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
+    say_untested(result)
     return 2 if problems else result.exit_code()
 
 

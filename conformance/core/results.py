@@ -180,11 +180,24 @@ class RunResult:
         verdicts = {c.verdict for c in self.cases}
         if Verdict.ADAPTER_ERROR in verdicts or any(i.kind == "protocol" for i in self.incidents):
             return 2
-        if verdicts <= set(UNTESTED) and (verdicts or self.shard is None):
-            return 2  # nothing was tested
+        if self.nothing_tested() is not None:
+            return 2
         if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested):
             return 1
         return 0
+
+    def nothing_tested(self) -> str | None:
+        """The line saying that nothing could be tested and why (every case INCONCLUSIVE or UNSUPPORTED; a shard of no
+        case tested all it was given), or None. Every command judging with this result model prints it."""
+        counts = Counter(c.verdict for c in self.cases)
+        if not set(counts) <= set(UNTESTED) or not (counts or self.shard is None):
+            return None
+        if not counts:
+            return "nothing could be tested: no case was judged"
+        why = ", ".join(f"{n} {v.value}" for v, n in sorted(counts.items(), key=lambda vn: vn[0].value))
+        if set(counts) == {Verdict.UNSUPPORTED}:
+            why += " (every answer was \"unsupported\": nothing asked of the implementation is implemented yet)"
+        return f"nothing could be tested: {why}"
 
     def to_dict(self) -> dict:
         memo: dict = {}

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import random
 import time
+from collections import Counter
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from ..core.cases import Case, expectation
 from ..core.results import CaseResult
 from ..core.runner import run_cases
-from ..core.verdicts import failing
+from ..core.verdicts import UNTESTED, failing
 from .source import PROPERTIES
 
 MAX_FINDINGS = 4  # distinct findings per group and property
@@ -76,6 +77,10 @@ class Tally:
     """Examples judged per (group, property), and the findings."""
 
     judged: dict[tuple[str, str], int] = field(default_factory=dict)
+    # per (group, property): the examples sent to every implementation (shrinking's included), and per implementation
+    # those it answered only UNSUPPORTED or INCONCLUSIVE (untested)
+    sent: Counter = field(default_factory=Counter)
+    untested: dict[tuple[str, str], Counter] = field(default_factory=dict)
     findings: list[Finding] = field(default_factory=list)
     stopped: str | None = None  # why the search ended early, if it did
 
@@ -126,6 +131,7 @@ class Search:
         self.seed, self.budget, self.until = seed, budget, until
         self.max_findings, self.first_only = max_findings, first_only
         self.tally = Tally()
+        self._key = ("", "")  # the (group, property) being searched: what the untested answers are counted under
 
     def judge(self, case: dict) -> dict[str, CaseResult]:
         """Every session's result on one case, through the runner (the corpus's own verdict policy and errata)."""
@@ -135,9 +141,12 @@ class Search:
         """Every session's result on each case (by case id), each session running the cases as one batch."""
         batch = [Case(c["id"], c["id"].split("/")[1], "vector", c) for c in cases]
         out: dict[str, dict[str, CaseResult]] = {}
+        untested = self.tally.untested.setdefault(self._key, Counter())
+        self.tally.sent[self._key] += len(cases)
         for name, session in self.sessions.items():
             for r in run_cases(session, self.suite, batch, edition=self.edition, adapter=name).cases:
                 out.setdefault(r.id, {})[name] = r
+                untested[name] += r.verdict in UNTESTED
         for case in cases:
             self.suite.kinds["vector"].forget(case, self.edition)
         return out
@@ -176,6 +185,7 @@ class Search:
             drawn: set[str] = set()  # case ids judged: a mutation drawn again is judged once
             seen: set = set()
             self.tally.judged[(group, "sweep")] = 0
+            self._key = (group, "sweep")
             for start in range(0, per_group, SWEEP_BATCH):
                 if self.until is not None and time.monotonic() > self.until:
                     self.tally.stopped = "the duration was spent"
@@ -215,7 +225,7 @@ class Search:
         from hypothesis import HealthCheck, Phase, Verbosity, find, settings
         from hypothesis.errors import NoSuchExample, Unsatisfiable
 
-        key = (group, prop)
+        key = self._key = (group, prop)
         self.tally.judged[key] = 0
         seen: set = set()
         strategy = self.source.inputs(group, prop).map(lambda drawn: self.source.case(group, prop, drawn))

@@ -40,14 +40,34 @@ def fuzz_result(suite, source, tally, names: list[str], implementations: list[st
         found[finding.case["id"].split("/")[1], finding.prop] += 1
     for (group, prop), judged in tally.judged.items():
         if not found[group, prop]:
-            detail = (f"{judged} generated {'messages' if prop == 'message' else 'frames'} judged: "
-                      f"{'every implementation agrees' if len(names) > 1 else names[0] + ' agrees'} with the reference")
-            filed[group].append(CaseResult(f"{suite.name}/{group}/fuzz/{prop}", group, Verdict.PASS, None,
-                                           source.clause(group), [CheckResult(f"fuzz:{prop}", Verdict.PASS, detail)]))
+            verdict, detail = _agreement(tally, (group, prop), names, judged,
+                                         "messages" if prop == "message" else "frames")
+            filed[group].append(CaseResult(f"{suite.name}/{group}/fuzz/{prop}", group, verdict, None,
+                                           source.clause(group), [CheckResult(f"fuzz:{prop}", verdict, detail)]))
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], False), filed[g.name])
                 for g in suite.groups if g.name in filed]
     return RunResult(suite.name, suite.title, edition, " vs ".join(implementations), ",".join(names), False, started,
                      round(duration, 3), messages, "", notes)
+
+
+def _agreement(tally, key: tuple[str, str], names: list[str], judged: int, what: str) -> tuple[Verdict, str]:
+    """The verdict and detail of a group and property without a finding: PASS where some implementation was tested
+    on its examples, naming any that answered every one untested (UNSUPPORTED: never agreement); UNSUPPORTED where
+    none was."""
+    sent, untested = tally.sent[key], tally.untested.get(key, {})
+    idle = [n for n in names if sent and untested.get(n, 0) == sent]
+    if not sent or len(idle) == len(names):
+        who = "the implementation" if len(names) == 1 else "every implementation"
+        return Verdict.UNSUPPORTED, (f"{judged} generated {what}: {who} answered every one unsupported (or could not "
+                                     "be tested): nothing was compared with the reference")
+    tested = [n for n in names if n not in idle]
+    agree = f"{'every implementation agrees' if len(names) > 1 else names[0] + ' agrees'} with the reference"
+    if idle:
+        agree = (f"{', '.join(tested)} {'agrees' if len(tested) == 1 else 'agree'} with the reference; "
+                 f"{', '.join(idle)} answered every one unsupported: not tested")
+    partly = sum(untested.get(n, 0) for n in tested)
+    return Verdict.PASS, f"{judged} generated {what} judged: {agree}" + (
+        f" ({partly} of the answers were unsupported: those not compared)" if partly else "")
 
 
 def unexplained(tally) -> int:
