@@ -18,7 +18,8 @@ from .errors import CorpusError
 from .core.cases import Case
 from .core.results import SCHEMAS, RunResult, format_version, message_verdict
 from .core.suite import Suite
-from .core.waivers import Waiver, WaiverError, waivers_in_force
+from .core.causes import subjects
+from .core.waivers import WaiverError, Waivers, waivers_in_force
 from .paths import VECTORS
 from .schemas import schema_error
 from .suites import load_suite
@@ -134,14 +135,14 @@ def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
 
 # ---------------------------------------------------------------- waivers and saved results
 
-def load_waivers(path: Path, known_ids: set[str], today: dt.date) -> tuple[dict[str, Waiver], list[str], dict]:
-    """The waivers in force by case id, notes on the expired ones, and what a result records of the file (its name
-    as given, the SHA-256 of its bytes, how many waivers were in force)."""
+def load_waivers(path: Path, cases: list, rules: set[str], today: dt.date) -> tuple[Waivers, list[str], dict]:
+    """The waivers in force, notes on the expired ones, and what a result records of the file (its name as given,
+    the SHA-256 of its bytes, how many waivers were in force). ``cases``: the whole corpus; ``rules``: the suite's."""
     raw, doc = read_json(Path(path), WaiverError)
     problem = schema_error(VECTORS / "schema" / "waivers.schema.json", doc, str(path))
     if problem:
         raise WaiverError(problem)
-    active, notes = waivers_in_force(doc, known_ids, today, str(path))
+    active, notes = waivers_in_force(doc, {c.id for c in cases}, rules, subjects(cases), today, str(path))
     return active, notes, {"file": str(path), "sha256": hashlib.sha256(raw).hexdigest(), "waivers": len(active)}
 
 

@@ -92,6 +92,50 @@ def test_write_waivers_then_adopt_them(tmp_path, capsys):
     assert failing("--id", "imc/LblRange/crc/*", "--waivers", str(path)) == 0
 
 
+ADOPTED = ("--message", "Heartbeat", "--message", "HistoricData")  # pyimclsts fails both by several causes
+
+
+def test_adopting_by_cause_takes_one_waiver_per_cause_and_exits_0(tmp_path, capsys):
+    path, result = tmp_path / "causes.json", tmp_path / "r.json"
+    assert failing(*ADOPTED, "--write-waivers", str(path), "--by", "cause", "--json", str(result)) == 1
+    written = json.loads(path.read_text())["waivers"]
+    causes = json.loads(result.read_text())["causes"]
+    assert [w["cause"] for w in written] == [c["key"] for c in causes] and len(written) >= 5
+    assert all(w["reason"].startswith(c["title"]) for w, c in zip(written, causes))
+    assert failing(*ADOPTED, "--waivers", str(path), "--json", str(result)) == 0
+    verdicts = {c["verdict"] for m in json.loads(result.read_text())["messages"] for c in m["cases"]}
+    assert "WAIVED" in verdicts and "FAIL" not in verdicts
+
+
+@pytest.mark.parametrize("entry", [{"glob": "imc/LblRange/crc/*"}, {"rule": "crc"}, {"cause": "accepts/rule:crc"}])
+def test_a_glob_a_rule_or_a_cause_waives_the_failures_it_names(entry, tmp_path, capsys):
+    path, result = waivers(tmp_path, {**entry, "reason": "pyimclsts checks no CRC (P1)"}), tmp_path / "r.json"
+    assert failing("--id", "imc/LblRange/crc/*", "--id", PASSING, "--waivers", path, "--json", str(result)) == 0
+    cases = {c["id"]: c for m in json.loads(result.read_text())["messages"] for c in m["cases"]}
+    assert cases[P1]["verdict"] == "WAIVED" and cases[P1]["waiver"] == "pyimclsts checks no CRC (P1)"
+    assert cases[PASSING]["verdict"] == "PASS"  # a broad waiver applies to failures only: no WAIVER_STALE here
+
+
+@pytest.mark.parametrize("entry", [{"cause": "accepts/rule:crc"}, {"rule": "crc"}, {"glob": "imc/LblRange/crc/*"}])
+def test_a_broad_waiver_that_waives_nothing_is_stale_and_exits_1(entry, tmp_path, capsys):
+    path = waivers(tmp_path, {**entry, "reason": "fixed since"})
+    assert run("--id", "imc/LblRange/crc/*", "--waivers", path) == 1  # imcpy checks the CRC
+    name = next(iter(entry.items()))
+    assert f"WAIVER_STALE: the waiver of {name[0]} {name[1]} names cases of this run but waives none" in \
+        capsys.readouterr().out
+
+
+@pytest.mark.parametrize("entry, error", [
+    ({"cause": "accepts/rule:crcc"}, "'accepts/rule:crcc' is not a cause key of this corpus"),
+    ({"rule": "crcc"}, "the suite has no rule 'crcc'"), ({"glob": "imc/Nothing/*"}, "no case id matches the glob"),
+    ({"rule": "crc", "cause": "accepts/rule:crc"}, "$.waivers[0]"),
+])
+def test_a_waiver_naming_nothing_of_the_corpus_is_an_error(entry, error, tmp_path, capsys):
+    path = waivers(tmp_path, {**entry, "reason": "typo"})
+    assert run("--id", PASSING, "--waivers", path) == 2
+    assert error in capsys.readouterr().err
+
+
 def test_reports_are_written_and_re_rendered(tmp_path, capsys):
     files = {fmt: tmp_path / f"r.{fmt}" for fmt in ("json", "junit", "markdown", "html")}
     assert failing("--id", "imc/LblRange/crc/*", *(a for fmt, p in files.items() for a in (f"--{fmt}", str(p)))) == 1

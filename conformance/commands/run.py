@@ -21,8 +21,12 @@ def add(sub) -> None:
     run.add_argument("--errata", metavar="KEY", help="the implementation errata that explain failures "
                                                      "(default: the key the adapter's hello declares)")
     run.add_argument("--strict", action="store_true", help="NON_STRICT verdicts fail too")
-    run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids with a reason and optional expiry")
+    run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids, globs, rules or cause keys, each with a "
+                                                       "reason and optional expiry")
     run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
+    run.add_argument("--by", choices=("case", "cause"), default="case",
+                     help="what each waiver --write-waivers writes names: a failing case (default), or a cause of the "
+                          "report's 'Failures by cause' (one waiver per cause)")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument("--last-failed", "--lf", metavar="FILE",
                      help="run again only the cases that did not pass in FILE, a result saved by run --json (a failing "
@@ -118,7 +122,8 @@ def command(args) -> int:
     waivers, notes, waived = {}, [], None
     if args.waivers:
         try:
-            waivers, notes, waived = load_waivers(Path(args.waivers), {c.id for c in everything}, dt.date.today())
+            waivers, notes, waived = load_waivers(Path(args.waivers), everything,
+                                                  set(suite.kinds["vector"].codec.rules), dt.date.today())
         except WaiverError as exc:
             raise UsageError(str(exc)) from exc
     chosen = {"message": args.message, "id": args.id, "tag": args.tag, "cases": total}
@@ -162,11 +167,14 @@ def command(args) -> int:
         console.print(f"pcapng of the exchange ({recorder.count} datagrams): {printable(str(args.pcap))}",
                       highlight=False, markup=False)
     if args.write_waivers:
-        from ..core.waivers import waivers_document
-        failing_ids = [c.id for c in result.cases if failing(c.verdict, strict=False)]
+        from ..core.waivers import cause_waivers_document, waivers_document
         reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
-        problems += write_file(Path(args.write_waivers), json.dumps(waivers_document(failing_ids, reason), indent=1) + "\n",
-                               f"waivers file ({len(failing_ids)} waivers)", console)
+        if args.by == "cause":
+            doc = cause_waivers_document(result.cause_groups(), reason)
+        else:
+            doc = waivers_document([c.id for c in result.cases if failing(c.verdict, strict=False)], reason)
+        problems += write_file(Path(args.write_waivers), json.dumps(doc, indent=1) + "\n",
+                               f"waivers file ({len(doc['waivers'])} waivers)", console)
     if not result.complete:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()

@@ -66,6 +66,20 @@ def about(case, data: dict | None = None) -> tuple[str, str]:
     return f"family:{family}", family
 
 
+def subjects(cases) -> set[str]:
+    """Every key ``about`` can give the corpus's cases (``cases``: core.cases.Case): what a cause key may end with."""
+    out = {"valid"}
+    for case in cases:
+        rule, named = case.data.get("rule"), case.data.get("class")
+        if rule:
+            out.add(f"rule:{rule}")
+        elif named:
+            out.add(f"class:{'+'.join(named) if isinstance(named, list) else named}")
+        else:
+            out.add(f"family:{case.id.split('/')[2] if case.id.count('/') >= 2 else case.id}")
+    return out
+
+
 def ops(case) -> list[str]:
     """The operations of the checks that gave the case its verdict (decode, encode, roundtrip, a step's name)."""
     worst = [c.check for c in case.checks if c.verdict == case.verdict] or [c.check for c in case.checks]

@@ -149,6 +149,8 @@ class RunResult:
     shard: tuple[int, int] | None = None  # (K, N) of a run of one shard of its selection (--shard K/N)
     provenance: Provenance | None = None  # None: a result of format 1 to 4, or one made without the command line
     causes: list[Cause] | None = None  # the failures grouped by cause (core.causes), made when first asked for
+    stale_waivers: list[str] = field(default_factory=list)  # broad waivers (e.g. "cause accepts/rule:crc") that waived
+    # nothing of the cases they name: the run fails as for a WAIVER_STALE case
 
     def cause_groups(self) -> list[Cause]:
         """The failing and NON_STRICT cases grouped by cause, largest first (as the run grouped them, or from what
@@ -182,7 +184,8 @@ class RunResult:
             return 2
         if self.nothing_tested() is not None:
             return 2
-        if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested):
+        if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested) or \
+                self.stale_waivers:
             return 1
         return 0
 
@@ -211,6 +214,7 @@ class RunResult:
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
                           "cases": [case_dict(c, memo) for c in m.cases]} for m in self.messages],
         } | ({"shard": {"index": self.shard[0], "of": self.shard[1]}} if self.shard else {}) | (
+            {"stale_waivers": self.stale_waivers} if self.stale_waivers else {}) | (
             {"provenance": asdict(self.provenance)} if self.provenance else {})
 
     @classmethod
@@ -223,7 +227,8 @@ class RunResult:
                    doc["started"], doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
                    [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []),
                    (doc["shard"]["index"], doc["shard"]["of"]) if "shard" in doc else None,
-                   Provenance(**doc["provenance"]) if "provenance" in doc else None, causes)
+                   Provenance(**doc["provenance"]) if "provenance" in doc else None, causes,
+                   doc.get("stale_waivers", []))
 
 
 def format_version(doc) -> int:

@@ -11,20 +11,20 @@ from dataclasses import replace
 from typing import Callable
 
 from .cases import Case, expectation, passive_id
-from .causes import cause_of, group_causes
+from .causes import about, cause_of, group_causes
 from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
 from .session import Answer, Job, Session
 from .suite import Suite
 from .verdicts import Verdict, failing, worst
-from .waivers import Waiver
+from .waivers import Waiver, Waivers, stale_note
 
 
 PROGRESS_EVERY = 64  # answers between calls of a run's progress callback
 
 
 def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str, adapter: str,
-              errata: str | None = None, waivers: dict[str, Waiver] | None = None, strict: bool = False,
+              errata: str | None = None, waivers: Waivers | None = None, strict: bool = False,
               notes: list[str] | None = None, progress: Callable[[int], None] | None = None,
               options: dict | None = None, clock: Callable[[], float] = time.perf_counter,
               started: str | None = None, provenance: Provenance | None = None, exitfirst: bool = False) -> RunResult:
@@ -81,7 +81,7 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     judges = {c.id: (c.data, kinds[c.kind].judge, []) for c in cases}
     timelines: dict[str, list[dict]] = {}
     answered: list[str] = []  # the case of each job answered (counted if the run is interrupted)
-    waivers = waivers or {}
+    waivers = waivers or Waivers()
     left = Counter(job.case_id for job in jobs) if exitfirst else None  # jobs unanswered, per case
     stopped_at: list[str] = []  # the failing case the run stopped at (exitfirst)
 
@@ -96,7 +96,7 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         answered.append(job.case_id)
         if left is not None:
             left[job.case_id] -= 1
-            if not left[job.case_id] and _fails(found, waivers.get(job.case_id), strict):
+            if not left[job.case_id] and _fails(job.case_id, data, edition, found, waivers, strict):
                 stopped_at.append(job.case_id)
 
     complete = True
@@ -133,11 +133,10 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         checks = [r for r in found if r.filed_under is None] if elsewhere else found
         if case.id not in timelines and len(checks) > 1:
             checks = sorted(checks, key=_check_name)
-        waiver = waivers.get(case.id)
-        verdict = case_verdict(checks, waiver)
+        data = case.data
+        verdict, waiver = _waived(case.id, data, edition, checks, waivers)
         explained = (suite.implementation_errata(case.id, errata, case.data.get("tags", ()))
                      if failing(verdict, strict=False) else [])
-        data = case.data
         filed[case.group].append(CaseResult(case.id, case.group, verdict, expectation(data, edition),
                                             data["clause"], checks, data.get("rule"), explained,
                                             waiver.reason if waiver else None, timelines.get(case.id, [])))
@@ -148,10 +147,13 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
                 for g in suite.groups if g.name in filed]
     data = {case.id: case.data for case in cases}
     causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)))
+    stale = [w.selector for w in waivers.stale()] if complete and not stopped_at else []
+    notes += [stale_note(s) for s in stale]
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
                      round(clock() - began, 3), messages, session.stderr, notes, complete,
                      list(session.incidents), untested, causes=causes,
-                     provenance=replace(provenance, errata=errata) if provenance is not None else None)
+                     provenance=replace(provenance, errata=errata) if provenance is not None else None,
+                     stale_waivers=stale)
 
 
 def case_verdict(checks: list[CheckResult], waiver: Waiver | None) -> Verdict:
@@ -162,11 +164,24 @@ def case_verdict(checks: list[CheckResult], waiver: Waiver | None) -> Verdict:
     return verdict
 
 
-def _fails(found: list[CheckResult], waiver: Waiver | None, strict: bool) -> bool:
+def _waived(case_id: str, data: dict, edition: str, checks: list[CheckResult],
+            waivers: Waivers) -> tuple[Verdict, Waiver | None]:
+    """A case's verdict and the waiver that applies to it: its id's, or the first glob, rule or cause waiver naming
+    it that covers its failure (the cause its checks give, as the report groups it)."""
+    verdict = case_verdict(checks, None)
+    if not waivers:
+        return verdict, None
+    unwaived = CaseResult(case_id, "", verdict, expectation(data, edition), "", checks, data.get("rule"))
+    cause = cause_of(unwaived, data) if failing(verdict, strict=True) else None
+    waiver = waivers.find(case_id, data.get("rule"), about(unwaived, data)[0], cause and cause[0])
+    return (verdict, None) if waiver is None else (case_verdict(checks, waiver), waiver)
+
+
+def _fails(case_id: str, data: dict, edition: str, found: list[CheckResult], waivers: Waivers, strict: bool) -> bool:
     """Whether a case that is done fails: by its own checks (as its waiver has them), or by a finding it filed under
     another group (a case of its own in the result)."""
     own = [r for r in found if r.filed_under is None]
-    return (bool(own) and failing(case_verdict(own, waiver), strict)) or any(
+    return (bool(own) and failing(_waived(case_id, data, edition, own, waivers)[0], strict)) or any(
         failing(r.verdict, strict) for r in found if r.filed_under is not None)
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from .causes import regrouped
 from .results import MessageResult, RunResult, message_verdict
+from .waivers import stale_note
 
 SHARDS_MAX = 10_000  # shards a selection may be split into (limits.py lists it with the other bounds)
 SAME = ("suite", "title", "edition", "implementation", "adapter", "strict")  # what the shards of one run share
@@ -52,15 +53,19 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
     for name in sorted(cases, key=lambda g: (rank.get(g, len(rank)), g)):
         ordered = sorted(cases[name], key=lambda c: (case_order.get(c.id, len(case_order)), c.id))
         messages.append(MessageResult(name, keys[name], message_verdict(ordered, first.strict), ordered))
-    notes = list(dict.fromkeys(n for r in results for n in r.notes))
+    stale = sorted(set(results[0].stale_waivers).intersection(*(r.stale_waivers for r in results)))
+    shard_stale = {stale_note(s) for r in results for s in r.stale_waivers}  # a waiver one shard used is not stale
+    notes = list(dict.fromkeys(n for r in results for n in r.notes if n not in shard_stale))
     notes.insert(0, f"the {n} shards of the run merged")
+    notes += [stale_note(s) for s in stale]
     return RunResult(first.suite, first.title, first.edition, first.implementation, first.adapter, first.strict,
                      min(r.started for r in results), round(sum(r.duration for r in results), 3), messages,
                      "".join(r.stderr for r in results), notes, all(r.complete for r in results),
                      [i for r in results for i in r.incidents],
                      sorted(set(results[0].untested).intersection(*(r.untested for r in results))),
                      provenance=first.provenance,
-                     causes=regrouped([c for m in messages for c in m.cases], [g for r in results for g in r.cause_groups()]))
+                     causes=regrouped([c for m in messages for c in m.cases], [g for r in results for g in r.cause_groups()]),
+                     stale_waivers=stale)
 
 
 def _shown(value, limit: int = 200) -> str:
