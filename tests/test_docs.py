@@ -375,3 +375,12 @@ def test_readme_is_a_front_door_into_the_manual():
     assert all((CHECKOUT / t).exists() for t in local), [t for t in local if not (CHECKOUT / t).exists()]
     assert {"docs/tutorial.md", "docs/how-to/ci.md", "docs/reference/cli.md", "docs/explanation/design.md",
             "docs/images/html-report.png"} <= set(local)
+
+
+def test_the_waivers_page_shows_the_file_the_command_wrote():
+    """how-to/waivers.md shows tests/data/pyimclsts-waivers.json (what its first example writes), which its second
+    example runs with: the page's file and the tested one are the same document."""
+    page = (DOCS / "how-to" / "waivers.md").read_text(encoding="utf-8")
+    shown = re.search(r"^```json\n(.*?)^```$", page, re.MULTILINE | re.DOTALL).group(1)
+    kept = (CHECKOUT / "tests" / "data" / "pyimclsts-waivers.json").read_text(encoding="utf-8")
+    assert json.loads(shown) == json.loads(kept) and len(json.loads(kept)["waivers"]) == 7
