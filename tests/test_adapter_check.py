@@ -39,6 +39,8 @@ def wrong(mode: str) -> list[str]:
     ("log-on-stdout", "not-json", "INFO handling hello"),
     ("unknown-op", "unknown-op", "KeyError: 'adapter-check-unknown-op'"),
     ("internal-on-accept", "internal", "no message class for id 999 (an input breaking unknown-id)"),
+    ("ignores-eof", "no-exit", "it still ran 3 s after its input ended"),
+    ("long-hello", "long-line", '{"id": 1, "ok": true, "implementation": "xxxx'),
 ])
 def test_each_mistake_is_caught_with_its_explanation(capsys, mode, code, seen):
     status, out = check(capsys, *wrong(mode))
@@ -46,6 +48,7 @@ def test_each_mistake_is_caught_with_its_explanation(capsys, mode, code, seen):
     assert status == 1, out
     mistakes = [line for line in out.splitlines() if line.startswith("MISTAKE ")]
     assert mistakes == [f"MISTAKE 1: {what}" + (mistakes[0][len(f"MISTAKE 1: {what}"):] if mistakes else "")], out
+    assert "the program ended before answering" not in out  # never said of what the check itself did
     assert seen in out and f"  fix:  {fix}" in out
 
 
@@ -70,6 +73,20 @@ def test_output_held_back_until_the_input_ends_is_explained(suite, cases):
         session.close()
     assert [m.code for m in outcome.mistakes] == ["unflushed"]
     assert '"implementation": "hostile reference codec"' in outcome.mistakes[0].seen
+
+
+def test_a_program_that_ends_once_the_check_closed_its_input_is_not_said_to_have_ended_early(suite, cases):
+    """No hello answer: adapter-check closes the input to look for buffered output, and the program then exits, as the
+    contract asks at the end of input. The mistake is the missing answer, never "the program ended before answering"."""
+    session = SubprocessSession([sys.executable, str(WRONG), "silent"], name="silent", encoding_param="byte_order",
+                                hello_timeout=1)
+    try:
+        outcome = check_adapter(session, suite, cases, "imc-5.4.30", timeout=2)
+    finally:
+        session.close()
+    assert [(m.code, m.seen) for m in outcome.mistakes] == [
+        ("hello-late", "no answer within 1 s, nor once adapter-check closed its input; it then exited, as it should at "
+                       "the end of input")]
 
 
 def test_an_adapter_that_cannot_start_is_explained(capsys, tmp_path):

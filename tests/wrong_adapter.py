@@ -8,7 +8,10 @@ written with the bits of the double it was widened to), ``missing-header`` (deco
 with the right ids in the wrong places), ``no-name`` (a hello without implementation), ``unflushed`` (stdout never
 flushed until the end), ``log-on-stdout`` (a log line among the answers), ``unknown-op`` (an unknown op answered as
 an adapter failure), ``internal-on-accept`` (an accepted frame of an unknown id answered as an adapter failure),
-``nothing`` (an unmodified starter: every request but hello answered unsupported; no mistake, nothing implemented).
+``nothing`` (an unmodified starter: every request but hello answered unsupported; no mistake, nothing implemented),
+``silent`` (reads every request, answers none, exits at the end of its input), ``long-hello`` (answers hello with a
+line over the 1 MB the suite reads, then waits for the end of its input), ``ignores-eof`` (right, but goes on running
+once its input ends).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import json
 import os
 import struct
 import sys
+import time
 
 from hostile_adapter import DEFS, answer as reference_answer
 
@@ -74,6 +78,12 @@ def main() -> None:
     out = os.fdopen(os.dup(1), "w", buffering=1 << 16) if MODE == "unflushed" else sys.stdout
     for line in sys.stdin:
         request = json.loads(line)
+        if MODE == "silent":
+            continue
+        if MODE == "long-hello" and request.get("op") == "hello":
+            out.write(json.dumps({**answer(request), "implementation": "x" * (1 << 21)}) + "\n")
+            out.flush()
+            continue
         if isinstance(request, list):  # a batch: the answers computed in reverse, numbered in order
             replies = [answer(r) for r in reversed(request)]
             for reply, r in zip(replies, request):
@@ -85,6 +95,8 @@ def main() -> None:
             out.write(json.dumps(answer(request)) + "\n")
         if MODE != "unflushed":
             out.flush()
+    if MODE == "ignores-eof":
+        time.sleep(600)  # adapter-check kills it (its process group) once it has seen it wait
 
 
 if __name__ == "__main__":

@@ -114,6 +114,10 @@ def _line_by_line(inner, suite, kind, probes: list[Probe], edition: str, timeout
             inner.batch = not found  # the probes then go one a line, so that each is judged on its own
             if not found:
                 out.passed.append(f"a batch of {len(requests)} requests, each answered with its own id")
+        found = wire.end_of_input(line)
+        out.add(found)
+        if not found and line.closed:
+            out.passed.append("it exited at the end of its input")
     finally:
         channel.stop(kill=True)
     return True

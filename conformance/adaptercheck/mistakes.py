@@ -23,6 +23,9 @@ CATALOGUE = {
              "answer every request within --timeout seconds (default 5), and flush after every line"),
     "exited": ("the program ended before answering",
                "keep reading requests until the end of input (EOF), then exit 0; its stderr is shown above"),
+    "no-exit": ("the program did not exit at the end of its input",
+                "when stdin ends (EOF: the end of the run), answer what is in flight and exit 0; a program that "
+                "waits on is killed at the end of every run, with whatever it had not yet written"),
     "not-json": ("a line on stdout is not JSON",
                  "write only answers to stdout, one JSON object per line; logs and banners go to stderr"),
     "nan-token": ("a line holds NaN or Infinity, which JSON does not have",

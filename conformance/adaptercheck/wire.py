@@ -14,6 +14,7 @@ from .mistakes import Mistake
 
 HELLO_ID, UNKNOWN_OP_ID = 1, 2
 UNKNOWN_OP = "adapter-check-unknown-op"
+EOF_WAIT = 3.0  # seconds a program has to exit once its input ended (the contract: answer what is in flight, exit 0)
 
 
 class Line:
@@ -21,7 +22,9 @@ class Line:
 
     def __init__(self, channel, timeout: float):
         self.channel, self.timeout = channel, timeout
-        self.ended = False  # the program ended (or closed its output, or the connection)
+        self.ended = False  # nothing more is read: the program ended (or closed its output), or the check stopped
+        self.closed = False  # the check closed the program's input (its end of input, as at the end of a run)
+        self.stopped = False  # the check stopped reading (a line over the bound), not the program
 
     def collect(self, wanted: set[int], where: str, *, arrays: bool, timeout: float | None = None):
         """The answers to ``wanted`` ids that came (each its reply object), and the mistakes in what came; waits
@@ -44,7 +47,7 @@ class Line:
                 break
             if kind == "oversize":
                 mistakes.append(Mistake("long-line", snippet(raw), where))
-                self.ended = True
+                self.ended = self.stopped = True
                 break
             try:
                 value = parse_line(raw)
@@ -86,9 +89,16 @@ def hello(line: Line, suite: str, encodings_key: str, encodings: tuple[str, ...]
     if HELLO_ID not in answers:
         if not line.ended and hasattr(line.channel, "popen"):  # a program: is its answer stuck in a buffer?
             line.channel.close_input()
+            line.closed = True
             late, _ = line.collect({HELLO_ID}, where, arrays=False)
             if late:
                 return None, mistakes + [Mistake("unflushed", snippet(json.dumps(late[HELLO_ID])), where)]
+        if line.stopped:  # the check stopped reading (the long line is the mistake), not the program
+            return None, mistakes
+        if line.closed:  # the check ended its input: ending then is what the contract asks
+            then = "; it then exited, as it should at the end of input" if line.ended else ""
+            return None, mistakes + [Mistake("hello-late", f"no answer within {wait:g} s, nor once adapter-check "
+                                                           f"closed its input{then}", where)]
         if line.ended:
             status = getattr(line.channel, "exit_status", lambda wait=0.5: None)() or "closed its output"
             tail = snippet(stderr()[-200:].strip())
@@ -115,6 +125,8 @@ def unknown_op(line: Line, suite: str) -> list[Mistake]:
     line.channel.send({"id": UNKNOWN_OP_ID, "op": UNKNOWN_OP, "suite": suite})
     answers, mistakes = line.collect({UNKNOWN_OP_ID}, where, arrays=False)
     reply = answers.get(UNKNOWN_OP_ID)
+    if reply is None and line.stopped:  # the check stopped reading at a long line: that is the mistake
+        return mistakes
     if reply is None:
         return mistakes + [Mistake("unknown-op", "no answer" if line.ended else f"no answer within {line.timeout:g} s",
                                    where)]
@@ -144,3 +156,14 @@ def together(line: Line, requests: dict[int, dict], same, *, batch: bool) -> lis
             mistakes.append(Mistake("ordering", f"the answer with id {ident} is the answer to request {matches}: "
                                                 f"{snippet(json.dumps(reply))}", where))
     return mistakes
+
+
+def end_of_input(line: Line) -> list[Mistake]:
+    """A program must exit once its input ends (the suite ends every run so): close it and wait ``EOF_WAIT``."""
+    if line.ended or not hasattr(line.channel, "popen"):
+        return []
+    line.channel.close_input()
+    line.closed = True
+    if line.channel.exit_status(wait=EOF_WAIT) is not None:
+        return []
+    return [Mistake("no-exit", f"it still ran {EOF_WAIT:g} s after its input ended", "end of input")]
