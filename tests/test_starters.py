@@ -71,6 +71,7 @@ def test_a_starter_passes_adapter_check(starter, capsys):
     assert main(["adapter-check", "--adapter-cmd", shlex.join(starter), "--timeout", "30"]) == 0
     out = capsys.readouterr().out
     assert "MISTAKE" not in out and "the adapter speaks the contract" in out
+    assert "implements nothing yet" in out and "it exited at the end of its input" in out
 
 
 def test_a_run_through_a_starter_is_all_unsupported(starter, tmp_path, capsys):
@@ -78,5 +79,6 @@ def test_a_run_through_a_starter_is_all_unsupported(starter, tmp_path, capsys):
     code = main(["run", "--adapter-cmd", shlex.join(starter), "--no-progress", "--timeout", "30", "--json", str(report)])
     doc = json.loads(report.read_text())
     assert code == 2 and doc["exit_code"] == 2  # nothing tested: every case UNSUPPORTED
+    assert "nothing could be tested" in capsys.readouterr().err
     assert set(doc["summary"]) == {"UNSUPPORTED"} and doc["summary"]["UNSUPPORTED"] > 4000
     assert not doc["incidents"] and not doc["causes"]

@@ -57,6 +57,9 @@ func answer(request map[string]any) map[string]any {
 	case "encode":
 		// TODO: build your message from request["message"] (read floats with floatBits(value, 4 or 8)), serialize it
 		// in request["byte_order"], and answer reply["ok"] = true, reply["frame"] = hex.EncodeToString(frame).
+		// What the implementation's own call returns or panics with is its answer, not the adapter's bug:
+		//   frame, err := codec.Marshal(msg); if err != nil { return refuse(reply, err.Error(), "") }
+		// and a panic inside it (a nil element of a list) is recovered around that call only and refused the same way.
 		return unsupported(reply, "encode is not implemented yet")
 	case "decode":
 		// TODO: frame, err := hex.DecodeString(request["frame"].(string)); deserialize it; answer its abbrev, the five

@@ -37,6 +37,10 @@ fn answer(request: &Value) -> Value {
         }),
         // TODO: build your message from request["message"] (read floats with float_bits(value, 4 or 8)), serialize it
         // in request["byte_order"], and answer {"id": id, "ok": true, "frame": to_hex(&frame)}.
+        // The implementation's own Err is its answer, not the adapter's bug:
+        //   match codec::encode(&msg) { Ok(frame) => ..., Err(e) => refuse(id, &e.to_string(), None) }
+        // (a panic inside its call, e.g. an index out of bounds, may be caught with std::panic::catch_unwind around
+        // that call only and refused the same way; left uncaught it ends the program: a CRASH of that case).
         Some("encode") => unsupported(id, "encode is not implemented yet"),
         // TODO: let frame = from_hex(request["frame"].as_str()...); deserialize it; answer its abbrev, the five header
         // fields and every field (floats with float_json(bits, 4 or 8)). A refusal: refuse(id, error, rule), with a rule

@@ -52,16 +52,21 @@ public final class Adapter {
                 case "encode":
                     // TODO: build your message from request.get("message") (read floats with floatBits(node, 4 or 8)),
                     // serialize it in request.get("byte_order"), and answer reply.put("frame", toHex(bytes)).
+                    // An exception thrown by the implementation's own call is its answer, not the adapter's bug:
+                    //   try { bytes = codec.serialize(msg); }
+                    //   catch (RuntimeException e) { return refuse(reply, e.toString(), null); }  // e.g. an NPE on a null list element
                     return unsupported(reply, "encode is not implemented yet");
                 case "decode":
                     // TODO: byte[] frame = fromHex(request.get("frame").asText()); deserialize it; answer its abbrev, the
                     // five header fields and every field (floats with floatJson(bits, 4 or 8)). A refusal:
-                    // refuse(reply, error, rule) with a rule only when the check that refused is that rule's check.
+                    // refuse(reply, error, rule) with a rule only when the check that refused is that rule's check; an
+                    // exception the implementation's deserialize throws (IndexOutOfBounds on a short frame) is a
+                    // refusal without a rule: catch it around that call only, as for encode.
                     return unsupported(reply, "decode is not implemented yet");
                 default:
                     return unsupported(reply, "unknown op");
             }
-        } catch (RuntimeException e) {  // a bug of the adapter, never a refusal
+        } catch (RuntimeException e) {  // a bug of the adapter's own code (reading the request, writing the answer)
             reply.removeAll();
             reply.set("id", request.get("id"));
             reply.put("ok", false).put("internal", true).put("error", e.toString());
