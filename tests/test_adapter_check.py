@@ -40,6 +40,7 @@ def wrong(mode: str) -> list[str]:
     ("unknown-op", "unknown-op", "KeyError: 'adapter-check-unknown-op'"),
     ("internal-on-accept", "internal", "no message class for id 999 (an input breaking unknown-id)"),
     ("ignores-eof", "no-exit", "it still ran 3 s after its input ended"),
+    ("npe-on-null", "internal", "java.lang.NullPointerException (an inline message field holding no message (null))"),
     ("long-hello", "long-line", '{"id": 1, "ok": true, "implementation": "xxxx'),
 ])
 def test_each_mistake_is_caught_with_its_explanation(capsys, mode, code, seen):

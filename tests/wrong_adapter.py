@@ -11,7 +11,8 @@ an adapter failure), ``internal-on-accept`` (an accepted frame of an unknown id 
 ``nothing`` (an unmodified starter: every request but hello answered unsupported; no mistake, nothing implemented),
 ``silent`` (reads every request, answers none, exits at the end of its input), ``long-hello`` (answers hello with a
 line over the 1 MB the suite reads, then waits for the end of its input), ``ignores-eof`` (right, but goes on running
-once its input ends).
+once its input ends), ``npe-on-null`` (its implementation throws on an inline message field holding none, and the
+adapter answers that "internal", as a Java adapter catching every RuntimeException the same way would).
 """
 
 from __future__ import annotations
@@ -36,6 +37,15 @@ def rewrite(value, change):
     return change(value)
 
 
+def holds_null(value) -> bool:
+    """Whether a decoded form holds a null anywhere (an inline message field, or a list element, holding none)."""
+    if isinstance(value, dict):
+        return any(holds_null(v) for v in value.values())
+    if isinstance(value, list):
+        return any(holds_null(v) for v in value)
+    return value is None
+
+
 def widened(value):
     """An fp32 NaN's text as a writer that widened it to a double puts it: the double's 16-digit bits."""
     if isinstance(value, str) and value.startswith("nan:") and len(value) == 12:
@@ -49,6 +59,8 @@ def answer(request: dict) -> dict:
         return {"id": request["id"], "ok": False, "unsupported": True, "error": "not implemented yet"}
     if MODE == "unknown-op" and request.get("op") not in ("hello", "encode", "decode"):
         return {"id": request["id"], "ok": False, "internal": True, "error": f"KeyError: {request.get('op')!r}"}
+    if MODE == "npe-on-null" and request.get("op") == "encode" and holds_null(request["message"]):
+        return {"id": request["id"], "ok": False, "internal": True, "error": "java.lang.NullPointerException"}
     if MODE == "header-required" and request.get("op") == "encode" and len(request["message"].get("header", {})) < 5:
         return {"id": request["id"], "ok": False, "internal": True, "error": "KeyError: 'timestamp'"}
     reply = reference_answer(request)

@@ -202,7 +202,7 @@ def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, 
     out.decoded_right = bool(float_decodes) and all(float_decodes)
     if len(out.mistakes) == wrong_before:
         floats = sum(p.teaches in FEATURES for p in probes)
-        out.passed.append(f"{len(jobs)} requests of {len(probes)} probes ({floats} with floats the decoded form spells "
+        out.passed.append(f"{len(jobs)} requests of {len(probes)} probes ({floats} with values the decoded form spells "
                           f"its own way, {len(probes) - floats} breaking one rule each"
                           f"{', one encode without header fields' if carrier is not None and emits else ''}): "
                           "answered as the contract asks")
@@ -223,7 +223,8 @@ def _explain(kind, probe: Probe, request: Request, answer: Answer, result, editi
         return None
     if answer.kind == "adapter-error":
         if answer.reason.startswith("adapter failed: "):
-            broken = f" (an input breaking {' and '.join(probe.breaks)})" if probe.breaks else ""
+            broken = (f" (an input breaking {' and '.join(probe.breaks)})" if probe.breaks else
+                      f" ({FEATURES[probe.teaches]})" if probe.teaches == "null-message" else "")
             return [Mistake("internal", answer.reason + broken, where)]
         return [Mistake("malformed", answer.reason, where)]
     if answer.kind != "ok":

@@ -59,8 +59,10 @@ CATALOGUE = {
                       "answer one object per line, or say \"batch\": true in the hello"),
     "malformed": ("an answer is not in the form the contract gives", "see the evidence: it says what is missing"),
     "internal": ("the adapter answered \"internal\": true (its own failure)",
-                 "an implementation's refusal is {\"ok\": false, \"error\": ..., \"rule\": ...}; an accepted input is "
-                 "answered with what it decoded; \"internal\" only for a bug of the adapter itself"),
+                 "an implementation's refusal is {\"ok\": false, \"error\": ..., \"rule\": ...}, and so is an exception "
+                 "its own call throws (catch it around that call only: a NullPointerException on a null list element "
+                 "is the implementation's); an accepted input is answered with what it decoded; \"internal\" only for "
+                 "a bug of the adapter itself"),
     "wrong-rule": ("a refusal names a rule the input does not break",
                    "name a rule only when the check that refused is that rule's check (not because the error text "
                    "mentions a word such as CRC); omit \"rule\" when the error does not say which check failed"),

@@ -1,6 +1,7 @@
 """The fixed, short set of corpus cases adapter-check sends, chosen from a suite's own byte vectors by what they hold
 (never by message): per float the decoded form spells in its own way (−0.0, a NaN's bits at each width, the
-infinities, a value needing many digits), the first valid case holding one; per rule of the suite, the first invalid
+infinities, a value needing many digits) and for an inline message field holding none (null, which an implementation
+in a managed language may throw on), the first valid case holding one; per rule of the suite, the first invalid
 case breaking it (one breaking that rule alone where there is one). What each invalid probe breaks is its ``flaws``:
 what the reference codec, with each rule's check switched off in turn, found when the corpus was generated (and
 ``generate --check`` proves again).
@@ -21,6 +22,7 @@ FEATURES = {
     "inf": "the infinity \"inf\"",
     "negative-inf": "the infinity \"-inf\"",
     "many-digits": "a float needing more than 7 significant digits",
+    "null-message": "an inline message field holding no message (null)",
 }
 
 
@@ -48,6 +50,8 @@ def features(value, found: set[str]) -> None:
                 found.add("negative-zero")
             elif math.isfinite(item) and len(repr(abs(item)).split("e")[0].replace(".", "").strip("0")) > 7:
                 found.add("many-digits")
+        elif item is None:  # an inline message field holding none: what a managed language's null trips over
+            found.add("null-message")
         elif isinstance(item, str):
             if item.startswith("nan:") and len(item) in (12, 20):
                 found.add(f"nan-bits-{32 if len(item) == 12 else 64}")
