@@ -143,3 +143,23 @@ def test_the_pytest_plugin_gives_the_same_outcomes_under_xdist(tmp_path):
         outcomes[bool(workers)] = sorted(line.split(" - ")[0] for line in done.stdout.splitlines()
                                          if line.startswith(("PASSED ", "FAILED ", "SKIPPED ")))
     assert outcomes[True] == outcomes[False] and any(o.startswith("FAILED") for o in outcomes[False])
+
+
+@pytest.mark.parametrize("adapter, code", [("pyimclsts", 0), ("imcpy", 1)])
+def test_a_cause_waiver_is_stale_in_merged_shards_only_when_it_waived_nothing(adapter, code, tmp_path, capsys):
+    """pyimclsts accepts frames with a wrong CRC (the waiver waives them in each shard); imcpy refuses them (the waiver
+    is stale in every shard, and so in the merge)."""
+    from imc_conformance.cli import main
+
+    waivers = tmp_path / "w.json"
+    waivers.write_text(json.dumps({"waivers": [{"cause": "accepts/rule:crc", "reason": "no CRC check yet"}]}))
+    parts = [tmp_path / f"shard{k}.json" for k in (1, 2)]
+    for k, part in enumerate(parts, 1):
+        main(["run", "--adapter", adapter, "--no-progress", "--id", "imc/LblRange/crc/*", "--waivers", str(waivers),
+              "--shard", f"{k}/2", "--json", str(part)])
+    merged = tmp_path / "merged.json"
+    assert main(["report", "--merge", *map(str, parts), "--json", str(merged)]) == code
+    doc = json.loads(merged.read_text())
+    stale = [n for n in doc["notes"] if n.startswith("WAIVER_STALE")]
+    assert doc.get("stale_waivers", []) == ([] if code == 0 else ["cause accepts/rule:crc"])
+    assert len(stale) == (code == 1), doc["notes"]
