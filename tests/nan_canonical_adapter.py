@@ -22,7 +22,8 @@ def canonical(value):
 
 class Adapter:
     def hello(self) -> dict:
-        return {"implementation": "a codec canonicalising NaN on encode", "suites": ["imc"], "byte_orders": ["le", "be"]}
+        return {"implementation": "a codec canonicalising NaN on encode", "suites": ["imc"],
+                "byte_orders": ["le", "be"]}
 
     def encode(self, suite: str, message: dict, byte_order: str) -> bytes:
         try:

@@ -100,8 +100,8 @@ def test_lossy_text_gets_one_verdict_whether_answered_as_a_string_or_as_hex():
     is lossy (IMPL_DEFINED) in either form, in both suites, and a Latin-1 reader FAILs in either form."""
     ros, ros_cases = open_corpus("ros_acomms")
     judged = 0
-    for kind, edition, cases in ((KIND, EDITION, CASES),
-                                 (ros.kinds["vector"], ros.editions[0], [c.data for c in ros_cases if c.kind == "vector"])):
+    ros_vectors = [c.data for c in ros_cases if c.kind == "vector"]
+    for kind, edition, cases in ((KIND, EDITION, CASES), (ros.kinds["vector"], ros.editions[0], ros_vectors)):
         lossy = [c for c in cases if c.get("expect") == "acceptable" and "lossy" in {o["outcome"] for o in c["outcomes"]}
                  and _read_text(c["message"], "utf-8", False) != c["message"]]
         for case in lossy:

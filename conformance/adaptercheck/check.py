@@ -247,7 +247,8 @@ def _held(kind, probe: Probe, request: Request, answer: Answer, edition: str) ->
         diffs = kind.codec.differences(data["message"], held, True, edition)
     except (ValueError, KeyError, TypeError, AttributeError):
         return None
-    return "; ".join(f"{d.path}: the request gave {d.expected!r}, the frame holds {d.actual!r}" for d in diffs[:3]) or None
+    held = "; ".join(f"{d.path}: the request gave {d.expected!r}, the frame holds {d.actual!r}" for d in diffs[:3])
+    return held or None
 
 
 def _decoded(kind, probe: Probe, message, edition: str, where: str) -> list[Mistake]:

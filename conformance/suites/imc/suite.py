@@ -54,7 +54,8 @@ class ImcCodec:
 
     def tolerates(self, outcome: str, op: str, difference) -> bool:
         """restamp (encoding): another header timestamp; lossy (decoding): plaintext with its non-ASCII bytes replaced
-        (texts.lossy_bytes, on the bytes the answer stands for, string or {"hex"}). A roundtrip both decodes and encodes."""
+        (texts.lossy_bytes, on the bytes the answer stands for, string or {"hex"}). A roundtrip both decodes and
+        encodes."""
         if outcome == "restamp" and op != "decode":
             return difference.path == "header.timestamp"
         if outcome == "lossy" and op != "encode" and difference.why == "plaintext":

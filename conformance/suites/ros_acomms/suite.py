@@ -63,8 +63,8 @@ class RosCodec:
         return codec.decode(self.defs.edition(edition), case["type"], frame)
 
     def tolerates(self, outcome: str, op: str, difference) -> bool:
-        """lossy (decoding, or a roundtrip): a string whose bytes that are not UTF-8 were replaced (texts.lossy_bytes, on the
-        bytes the answer stands for, string or {"hex"})."""
+        """lossy (decoding, or a roundtrip): a string whose bytes that are not UTF-8 were replaced
+        (texts.lossy_bytes, on the bytes the answer stands for, string or {"hex"})."""
         if outcome == "lossy" and op != "encode" and difference.why == "string":
             try:
                 return lossy_bytes(codec.string_bytes(difference.expected), codec.string_bytes(difference.actual))
