@@ -76,6 +76,14 @@ def test_output_held_back_until_the_input_ends_is_explained(suite, cases):
     assert '"implementation": "hostile reference codec"' in outcome.mistakes[0].seen
 
 
+def test_an_implementation_exception_on_a_null_list_element_answered_internal_is_named(capsys):
+    status, out = check(capsys, *wrong("npe-on-null"))
+    assert status == 1 and "MISTAKE 1: the adapter answered \"internal\": true" in out
+    assert ("java.lang.NullPointerException (an input of class null-list-element, which an implementation may accept "
+            "or refuse)") in out
+    assert "a NullPointerException on a null list element is the implementation's" in out
+
+
 def test_a_program_that_ends_once_the_check_closed_its_input_is_not_said_to_have_ended_early(suite, cases):
     """No hello answer: adapter-check closes the input to look for buffered output, and the program then exits, as the
     contract asks at the end of input. The mistake is the missing answer, never "the program ended before answering"."""

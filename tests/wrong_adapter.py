@@ -11,8 +11,9 @@ an adapter failure), ``internal-on-accept`` (an accepted frame of an unknown id 
 ``nothing`` (an unmodified starter: every request but hello answered unsupported; no mistake, nothing implemented),
 ``silent`` (reads every request, answers none, exits at the end of its input), ``long-hello`` (answers hello with a
 line over the 1 MB the suite reads, then waits for the end of its input), ``ignores-eof`` (right, but goes on running
-once its input ends), ``npe-on-null`` (its implementation throws on an inline message field holding none, and the
-adapter answers that "internal", as a Java adapter catching every RuntimeException the same way would).
+once its input ends), ``npe-on-null`` (its implementation throws on an inline message field or a list element holding none,
+encoding or decoding, and the adapter answers that "internal", as a Java adapter catching every RuntimeException the
+same way would).
 """
 
 from __future__ import annotations
@@ -64,6 +65,8 @@ def answer(request: dict) -> dict:
     if MODE == "header-required" and request.get("op") == "encode" and len(request["message"].get("header", {})) < 5:
         return {"id": request["id"], "ok": False, "internal": True, "error": "KeyError: 'timestamp'"}
     reply = reference_answer(request)
+    if MODE == "npe-on-null" and request.get("op") == "decode" and holds_null(reply.get("message")):
+        return {"id": request["id"], "ok": False, "internal": True, "error": "java.lang.NullPointerException"}
     if request.get("op") == "hello":
         if MODE == "no-name":
             del reply["implementation"]

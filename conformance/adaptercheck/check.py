@@ -202,8 +202,10 @@ def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, 
     out.decoded_right = bool(float_decodes) and all(float_decodes)
     if len(out.mistakes) == wrong_before:
         floats = sum(p.teaches in FEATURES for p in probes)
+        classes = sum(p.teaches.startswith("class:") for p in probes)
         out.passed.append(f"{len(jobs)} requests of {len(probes)} probes ({floats} with values the decoded form spells "
-                          f"its own way, {len(probes) - floats} breaking one rule each"
+                          f"its own way, {classes} an implementation may accept or refuse, "
+                          f"{len(probes) - floats - classes} breaking one rule each"
                           f"{', one encode without header fields' if carrier is not None and emits else ''}): "
                           "answered as the contract asks")
 
@@ -224,11 +226,17 @@ def _explain(kind, probe: Probe, request: Request, answer: Answer, result, editi
     if answer.kind == "adapter-error":
         if answer.reason.startswith("adapter failed: "):
             broken = (f" (an input breaking {' and '.join(probe.breaks)})" if probe.breaks else
-                      f" ({FEATURES[probe.teaches]})" if probe.teaches == "null-message" else "")
+                      f" ({FEATURES[probe.teaches]})" if probe.teaches == "null-message" else
+                      f" (an input of {probe.teaches.replace(':', ' ')}, which an implementation may accept or refuse)"
+                      if probe.teaches.startswith("class:") else "")
             return [Mistake("internal", answer.reason + broken, where)]
         return [Mistake("malformed", answer.reason, where)]
     if answer.kind != "ok":
         return None
+    if request.op == "decode" and probe.teaches.startswith("class:") and result.verdict is Verdict.ADAPTER_ERROR:
+        found = _header_missing(probe.case.data.get("message"), answer.message, where)
+        if found:
+            return found
     if request.op == "decode" and probe.teaches in FEATURES:
         found = _decoded(kind, probe, answer.message, edition, where)
         if found or result.verdict is not Verdict.ADAPTER_ERROR:
@@ -255,11 +263,7 @@ def _decoded(kind, probe: Probe, message, edition: str, where: str) -> list[Mist
     """The mistakes a decoded answer shows: header fields left out, values a JSON writer got wrong."""
     data = probe.case.data
     expected = data["message"]
-    out = []
-    if isinstance(message, dict) and isinstance(message.get("header"), dict) and isinstance(expected.get("header"), dict):
-        missing = [k for k in expected["header"] if k not in message["header"]]
-        if missing:
-            out.append(Mistake("header-missing", f"no {', '.join(missing)} in {str(message['header'])[:120]}", where))
+    out = _header_missing(expected, message, where)
     try:
         diffs = kind.codec.differences(expected, message, data.get("compare", {}).get("nan_payload", False), edition)
     except (TypeError, ValueError, KeyError, AttributeError):
@@ -269,6 +273,16 @@ def _decoded(kind, probe: Probe, message, edition: str, where: str) -> list[Mist
         if code is not None:
             out.append(Mistake(code, f"{diff.path}: expected {diff.expected!r}, answered {diff.actual!r}", where))
     return out
+
+
+def _header_missing(expected, message, where: str) -> list[Mistake]:
+    """The header fields the case's message has that a decoded answer left out."""
+    if isinstance(message, dict) and isinstance(message.get("header"), dict) and isinstance(expected, dict) \
+            and isinstance(expected.get("header"), dict):
+        missing = [k for k in expected["header"] if k not in message["header"]]
+        if missing:
+            return [Mistake("header-missing", f"no {', '.join(missing)} in {str(message['header'])[:120]}", where)]
+    return []
 
 
 def _no_header(kind, probe: Probe, request: Request, answer: Answer, edition: str, out: Outcome) -> list[Mistake]:

@@ -1,7 +1,7 @@
 """The fixed, short set of corpus cases adapter-check sends, chosen from a suite's own byte vectors by what they hold
 (never by message): per float the decoded form spells in its own way (−0.0, a NaN's bits at each width, the
 infinities, a value needing many digits) and for an inline message field holding none (null, which an implementation
-in a managed language may throw on), the first valid case holding one; per rule of the suite, the first invalid
+in a managed language may throw on), the first valid case holding one; per class of acceptable cases, the first; per rule of the suite, the first invalid
 case breaking it (one breaking that rule alone where there is one). What each invalid probe breaks is its ``flaws``:
 what the reference codec, with each rule's check switched off in turn, found when the corpus was generated (and
 ``generate --check`` proves again).
@@ -60,8 +60,12 @@ def features(value, found: set[str]) -> None:
 
 
 def choose(cases: list, edition: str, rules: frozenset[str]) -> list[Probe]:
-    """The probes: one valid case per feature (one pinning NaN bits for the NaN features), one invalid case per rule."""
+    """The probes: one valid case per feature (one pinning NaN bits for the NaN features), one acceptable case per
+    class (what an implementation may accept or refuse: a null list element, an inline message of another type, an
+    enumeration value out of its table, which a typed API in a managed language may throw on), one invalid case per
+    rule."""
     valid: dict[str, object] = {}
+    acceptable: dict[str, Probe] = {}
     invalid: dict[str, Probe] = {}
     for case in cases:
         data = case.data
@@ -75,10 +79,13 @@ def choose(cases: list, edition: str, rules: frozenset[str]) -> list[Probe]:
             for feature in sorted(found):
                 if feature not in valid and (pinned or not feature.startswith("nan-bits")):
                     valid[feature] = case
+        elif expect == "acceptable" and data.get("class"):
+            named = "+".join(data["class"]) if isinstance(data["class"], list) else data["class"]
+            acceptable.setdefault(named, Probe(case, f"class:{named}"))
         elif expect == "invalid" and data.get("rule") in rules:
             breaks = tuple(data.get("flaws", {}).get("rules", (data["rule"],)))
             known = invalid.get(data["rule"])
             if known is None or (len(known.breaks) > 1 and len(breaks) == 1):
                 invalid[data["rule"]] = Probe(case, data["rule"], breaks)
     out = [Probe(valid[f], f) for f in FEATURES if f in valid]
-    return out + [invalid[r] for r in sorted(invalid)]
+    return out + [acceptable[c] for c in sorted(acceptable)] + [invalid[r] for r in sorted(invalid)]
