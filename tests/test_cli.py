@@ -134,6 +134,8 @@ def test_a_waiver_naming_nothing_of_the_corpus_is_an_error(entry, error, tmp_pat
     path = waivers(tmp_path, {**entry, "reason": "typo"})
     assert run("--id", PASSING, "--waivers", path) == 2
     assert error in capsys.readouterr().err
+    assert run("--id", PASSING, "--by", "cause") == 2  # --by without --write-waivers
+    assert "give --write-waivers FILE too" in capsys.readouterr().err
 
 
 def test_reports_are_written_and_re_rendered(tmp_path, capsys):

@@ -115,6 +115,8 @@ def command(args) -> int:
     name, argv = (args.target, None) if args.target else adapter_choice(args, suite)
     if not total:
         raise UsageError("the selection matches no case")  # a shard of none is a result of none (merged later)
+    if getattr(args, "by", "case") != "case" and not args.write_waivers:
+        raise UsageError("--by says what the waivers --write-waivers writes name: give --write-waivers FILE too")
     if args.dry_run:
         if args.pcap:
             raise UsageError("--pcap records what a run sends and receives; --dry-run sends nothing")
@@ -169,7 +171,7 @@ def command(args) -> int:
     if args.write_waivers:
         from ..core.waivers import cause_waivers_document, waivers_document
         reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
-        if args.by == "cause":
+        if getattr(args, "by", "case") == "cause":
             doc = cause_waivers_document(result.cause_groups(), reason)
         else:
             doc = waivers_document([c.id for c in result.cases if failing(c.verdict, strict=False)], reason)
