@@ -101,8 +101,8 @@ def test_cli_reference_holds_every_command_and_option(site):
 
 def test_cli_reference_follows_a_renamed_option(monkeypatch):
     """The page is made from the parsers when the site is built: a renamed option is there, the old name gone."""
-    hooks = tool("hooks")
-    original = hooks.build_parser
+    reference = tool("reference")
+    original = reference.build_parser
 
     def renamed(argv=None):
         text = "\n".join(f"{a.option_strings}" for a in original()._actions)
@@ -114,22 +114,35 @@ def test_cli_reference_follows_a_renamed_option(monkeypatch):
                 action.option_strings = ["--quiet-progress"]
         return parser
 
-    before = hooks.cli_reference()
-    monkeypatch.setattr(hooks, "build_parser", renamed)
-    after = hooks.cli_reference()
+    before = reference.cli_reference()
+    monkeypatch.setattr(reference, "build_parser", renamed)
+    after = reference.cli_reference()
     run_before, run_after = (text.split("## `run`")[1].split("\n## ")[0] for text in (before, after))
     assert "`--no-progress`" in run_before and "`--quiet-progress`" not in run_before
     assert "`--quiet-progress`" in run_after and "`--no-progress`" not in run_after
 
 
-def test_an_unknown_marker_stops_the_build():
-    hooks = tool("hooks")
-
-    class Page:
-        class file:
-            src_uri = "x.md"
+def test_an_unknown_marker_is_an_error():
     with pytest.raises(ValueError, match="no generated part named 'nothing'"):
-        hooks.on_page_markdown("# X\n\n<!-- generated: nothing -->\n", Page, None, None)
+        tool("reference").render("# X\n\n<!-- generated: nothing -->\n", "x.md")
+
+
+def test_reference_pages_are_current():
+    """The generated parts are committed (a forge shows them): each is what ``make reference`` writes today."""
+    reference = tool("reference")
+    assert len(reference.pages()) >= 7
+    stale = [str(p.relative_to(CHECKOUT)) for p in reference.stale()]
+    assert not stale, f"stale reference pages, run make reference: {stale}"
+
+
+def test_a_stale_reference_page_is_found(tmp_path, monkeypatch):
+    reference = tool("reference")
+    page = tmp_path / "cli.md"
+    page.write_text(reference.render("# Command line\n\n<!-- generated: cli -->\n"), encoding="utf-8")
+    monkeypatch.setattr(reference, "PAGES", tmp_path)
+    assert reference.stale() == []
+    page.write_text(page.read_text(encoding="utf-8").replace("--no-progress", "--quiet-progress"), encoding="utf-8")
+    assert reference.stale() == [page]
 
 
 # --- the runnable examples ----------------------------------------------------------------------------------------
@@ -375,3 +388,15 @@ def test_readme_is_a_front_door_into_the_manual():
     assert all((CHECKOUT / t).exists() for t in local), [t for t in local if not (CHECKOUT / t).exists()]
     assert {"docs/tutorial.md", "docs/how-to/ci.md", "docs/reference/cli.md", "docs/explanation/design.md",
             "docs/images/html-report.png"} <= set(local)
+
+
+def test_every_page_the_readme_links_is_readable_on_a_forge():
+    """A forge shows the Markdown as committed: every page the README links holds text beyond its heading and
+    markers (the reference pages' generated parts included)."""
+    text = (CHECKOUT / "README.md").read_text(encoding="utf-8")
+    pages = {t for t in re.findall(r"\]\(([^)\s#]+\.md)(?:#[^)]*)?\)", text) if not t.startswith("http")}
+    assert "docs/reference/cli.md" in pages and "docs/reference/schemas.md" in pages
+    for page in sorted(pages):
+        body = re.sub(r"<!--.*?-->|^#.*$|^---$[\s\S]*?^---$", "", (CHECKOUT / page).read_text(encoding="utf-8"),
+                      flags=re.MULTILINE)
+        assert len(body.split()) > 150, f"{page}: {len(body.split())} words on a forge"
