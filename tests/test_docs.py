@@ -1,15 +1,27 @@
 """The manual (docs/, mkdocs.yml): built with ``mkdocs build --strict`` into a temporary folder, its runnable examples
-run against the real implementations, the built site opened in Debian's Chromium, and the report screenshot taken.
+run as a newcomer would run them, the built site opened in Debian's Chromium, and the report screenshot taken.
+
+A page is run in a shell (bash) that holds only what the page set up: a clean environment (no virtual environment,
+no PATH but Python's and the system's), the checkout installed by the tutorial's own commands. A block right after a
+line ``<!-- setup -->`` is a ``sh`` block of commands run as written (each must exit 0). The tutorial's setup blocks
+(clone, virtual environment, ``pip install`` with the extras its steps need) run once per test session, in a fresh
+copy of the checkout's files, from a clean shell; its other blocks then run in the shell that left. Every other page
+starts from a clean shell in the folder that holds that checkout and runs its own setup blocks (``cd``, activate).
 
 A runnable example is a ``console`` block right after a line ``<!-- runnable -->``: each ``$ `` line is a command,
-run without a shell from a fresh folder (``tests/data`` of the checkout reachable as ``tests/data``), and the lines
-after it are what it must print, in that order, among its output (``...`` stands for anything, in a line or as a
-line). The marker's ``exit=N`` is the exit code every command of the block must give (0 by default); ``port=P``
-replaces the port P by a free loopback port in the block. A command ending in `` &`` runs in the background until the
-block ends (then Ctrl-C), and must have printed its lines by the next command."""
+and the lines after it are what it must print, in that order, among its output (``...`` stands for anything, in a
+line or as a line). The marker's ``exit=N`` is the exit code every command of the block must give (0 by default);
+``port=P`` replaces the port P by a free loopback port in the block. A command ending in `` &`` runs in the
+background until the page ends (then Ctrl-C), and must have printed its lines by the next command.
+
+pip's cache is the user's (``pip cache dir``) and the suite's download cache is shared, so the install costs a build
+of the suite's wheel and no download once the cache is warm."""
 
 from __future__ import annotations
 
+import base64
+import contextlib
+import fcntl
 import functools
 import http.server
 import importlib.util
@@ -18,6 +30,7 @@ import os
 import re
 import select
 import shlex
+import shutil
 import signal
 import socket
 import subprocess
@@ -32,7 +45,6 @@ import pytest
 CHECKOUT = Path(__file__).resolve().parents[1]
 DOCS = CHECKOUT / "docs"
 TOOLS = DOCS / "tools"
-CLI = Path(sys.executable).with_name("imc-conformance")
 CHROMIUM = Path("/usr/bin/chromium")
 MARKER = re.compile(r"^<!-- runnable((?: \w+=\w+)*) -->\n```console\n(.*?)^```$", re.MULTILINE | re.DOTALL)
 BUILD_ENV = {**os.environ, "NO_MKDOCS_2_WARNING": "1", "PYTHONDONTWRITEBYTECODE": "1"}
@@ -147,9 +159,17 @@ def test_a_stale_reference_page_is_found(tmp_path, monkeypatch):
 
 # --- the runnable examples ----------------------------------------------------------------------------------------
 
+SETUP = re.compile(r"^<!-- setup -->\n```sh\n(.*?)^```$", re.MULTILINE | re.DOTALL)
+BLOCK = re.compile(rf"{SETUP.pattern}|{MARKER.pattern}", re.MULTILINE | re.DOTALL)
+TUTORIAL = "tutorial.md"
+CHECKOUT_NAME = "imc-conformance"  # the folder the tutorial's clone makes
+COPY_IGNORE = (".git", ".venv", ".cache", "__pycache__", "*.egg-info", ".pytest_cache", ".hypothesis", "build",
+               "reports", "site", "dist")
+
+
 @dataclass
 class Command:
-    argv: list[str]
+    line: str
     shown: list[str] = field(default_factory=list)
     background: bool = False
 
@@ -160,31 +180,35 @@ class Example:
     line: int
     exit: int
     commands: list[Command]
+    setup: bool = False
+    port: str | None = None
 
 
 def examples() -> list[Example]:
+    """Every setup block and runnable example of the manual, page by page, in order."""
     out = []
     for path in sorted(DOCS.rglob("*.md")):
         text = path.read_text(encoding="utf-8")
-        for match in MARKER.finditer(text):
-            options = dict(o.split("=") for o in match.group(1).split())
-            body = match.group(2)
-            if "port" in options:
-                body = body.replace(options["port"], "{port}")
+        for match in BLOCK.finditer(text):
+            where = (str(path.relative_to(DOCS)), text[:match.start()].count("\n") + 1)
+            if match.group(1) is not None:
+                out.append(Example(*where, 0, [Command(match.group(1))], setup=True))
+                continue
+            options = dict(o.split("=") for o in match.group(2).split())
             commands = []
-            for line in body.splitlines():
+            for line in match.group(3).splitlines():
                 if line.startswith("$ "):
-                    argv = shlex.split(line[2:])
-                    background = argv[-1] == "&"
-                    commands.append(Command(argv[:-1] if background else argv, background=background))
+                    background = line.rstrip().endswith(" &")
+                    commands.append(Command(line[2:].rstrip().removesuffix("&").rstrip() if background else line[2:],
+                                            background=background))
                 else:
                     commands[-1].shown.append(line)
-            out.append(Example(str(path.relative_to(DOCS)), text[:match.start()].count("\n") + 1,
-                               int(options.get("exit", 0)), commands))
+            out.append(Example(*where, int(options.get("exit", 0)), commands, port=options.get("port")))
     return out
 
 
 EXAMPLES = examples()
+PAGES = sorted({e.page for e in EXAMPLES if not e.setup})
 
 
 def shown_in(shown: list[str], printed: str) -> str | None:
@@ -206,57 +230,211 @@ def free_udp_port() -> int:
         return probe.getsockname()[1]
 
 
-def read_until_shown(proc: subprocess.Popen, shown: list[str], timeout: float) -> str:
-    printed, end = "", time.monotonic() + timeout
-    while shown_in(shown, printed) is not None and time.monotonic() < end:
-        if select.select([proc.stdout], [], [], 0.1)[0]:
-            line = proc.stdout.readline()
+def clean_environment(home: Path) -> dict[str, str]:
+    """What a newcomer's fresh shell holds: Python's and the system's folders on PATH, and nothing installed. The
+    machine's pip settings and proxies are kept (how it reaches PyPI), and pip's and the suite's caches are the
+    user's (speed only: what they hold is what the registries serve)."""
+    user = Path.home()
+    env = {"PATH": f"{Path(sys.base_prefix) / 'bin'}:/usr/local/bin:/usr/bin:/bin", "HOME": str(home),
+           "LANG": "C.UTF-8", "TERM": "dumb", "COLUMNS": "200", "NO_COLOR": "1",
+           "PIP_CACHE_DIR": os.environ.get("PIP_CACHE_DIR", str(user / ".cache" / "pip")),
+           "IMC_CONFORMANCE_CACHE": os.environ.get("IMC_CONFORMANCE_CACHE", str(user / ".cache" / "imc-conformance"))}
+    env.update({k: v for k, v in os.environ.items() if k.startswith("PIP_") or k.lower().endswith("_proxy")})
+    env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
+    return env
+
+
+class Shell:
+    """A bash the test types into, as a reader types the page's commands: state (cd, an activated virtual
+    environment) carries from one command to the next; each command's output and exit code are read back."""
+
+    def __init__(self, cwd: Path, env: dict[str, str], logs: Path):
+        self.proc = subprocess.Popen(["bash", "--noprofile", "--norc"], cwd=cwd, env=env, stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                     start_new_session=True)
+        self.logs, self.background, self.count = logs, [], 0
+        self._send("set -m")  # background jobs in groups of their own, so that Ctrl-C (SIGINT) reaches them
+
+    def _send(self, text: str) -> None:
+        self.proc.stdin.write(text + "\n")
+        self.proc.stdin.flush()
+
+    def run(self, command: str, timeout: float) -> tuple[int, str]:
+        """The command's exit code and everything it printed."""
+        self.count += 1
+        token = f"@@done-{self.count}-{os.getpid()}"
+        self._send(f"{{ {command}\n}} < /dev/null 2>&1\nprintf '\\n{token} %s\\n' $?")
+        printed, end = [], time.monotonic() + timeout
+        while True:
+            left = end - time.monotonic()
+            if left <= 0 or not select.select([self.proc.stdout], [], [], left)[0]:
+                raise TimeoutError(f"{command!r} did not end within {timeout} s; printed:\n{''.join(printed)}")
+            line = self.proc.stdout.readline()
             if not line:
+                raise EOFError(f"the shell ended during {command!r}; printed:\n{''.join(printed)}")
+            if line.startswith(token):
+                return int(line.split()[1]), "".join(printed).removesuffix("\n")
+            printed.append(line)
+
+    def start(self, command: str, shown: list[str], timeout: float) -> str:
+        """A command run in the background (``&``); what it printed once the lines shown have appeared."""
+        log = self.logs / f"background-{self.count + 1}.log"
+        code, pid = self.run(f"{command} > {shlex.quote(str(log))} 2>&1 &\necho $!", timeout=10)
+        self.background.append(int(pid.split()[-1]))
+        end = time.monotonic() + timeout
+        printed = ""
+        while time.monotonic() < end:
+            printed = log.read_text(errors="replace") if log.exists() else ""
+            if shown_in(shown, printed) is None:
                 break
-            printed += line
-    return printed
+            time.sleep(0.1)
+        return printed
+
+    def alive(self, pid: int) -> bool:
+        return self.run(f"kill -0 {pid} 2>/dev/null", timeout=10)[0] == 0
+
+    def close(self) -> None:
+        for pid in self.background:
+            try:
+                os.killpg(pid, signal.SIGINT)
+            except ProcessLookupError:
+                continue
+            end = time.monotonic() + 10
+            while time.monotonic() < end and self.alive(pid):
+                time.sleep(0.1)
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(pid, signal.SIGKILL)
+        with contextlib.suppress(BrokenPipeError):
+            self._send("exit")
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+        self.proc.stdin.close()
+        self.proc.stdout.close()
+
+
+def run_setup(shell: Shell, example: Example) -> None:
+    code, printed = shell.run(example.commands[0].line, timeout=900)
+    assert code == 0, f"{example.page}:{example.line}: a setup block exited {code}:\n{printed[-4000:]}"
+
+
+@dataclass
+class Installed:
+    """The tutorial's install, done once: the folder holding the checkout and the environment its shell left."""
+    work: Path
+    env: dict[str, str]
+    cwd: Path
+    seconds: float
+
+
+def _install(work: Path) -> Installed:
+    """The tutorial's setup blocks from a clean shell in ``work``, where the clone is a copy of the checkout's files."""
+    shutil.copytree(CHECKOUT, work / CHECKOUT_NAME, symlinks=True, ignore=shutil.ignore_patterns(*COPY_IGNORE))
+    (work / "home").mkdir()
+    shell = Shell(work, clean_environment(work / "home"), work)
+    started = time.monotonic()
+    try:
+        for example in EXAMPLES:
+            if example.page == TUTORIAL and example.setup:
+                lines = example.commands[0].line.splitlines()
+                kept = "\n".join(line for line in lines if not line.startswith("git clone "))
+                run_setup(shell, Example(example.page, example.line, 0, [Command(kept)], setup=True))
+        code, dump = shell.run("pwd; env -0 | base64 -w0", timeout=10)
+    finally:
+        shell.close()
+    cwd, encoded = dump.splitlines()[-2:]
+    env = dict(item.split("=", 1) for item in base64.b64decode(encoded).decode().split("\0") if "=" in item)
+    for name in ("PWD", "OLDPWD", "SHLVL", "_"):
+        env.pop(name, None)
+    return Installed(work, env, Path(cwd), time.monotonic() - started)
+
+
+@pytest.fixture(scope="session")
+def installed(tmp_path_factory) -> Installed:
+    """Once per test session, shared by pytest-xdist's workers (the first to come installs, under a lock)."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent
+    work, state = root / "docs-install", root / "docs-install.json"
+    with open(root / "docs-install.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not state.exists():
+            if work.exists():
+                shutil.rmtree(work)
+            work.mkdir()
+            done = _install(work)
+            state.write_text(json.dumps({"env": done.env, "cwd": str(done.cwd), "seconds": done.seconds}))
+        saved = json.loads(state.read_text())
+    return Installed(work, saved["env"], Path(saved["cwd"]), saved["seconds"])
+
+
+def page_folder(installed: Installed, tmp_path: Path) -> Path:
+    """A folder of the page's own, laid out as the tutorial left its reader's (the checkout, its files linked), so
+    that what one page writes never meets another's."""
+    checkout = tmp_path / CHECKOUT_NAME
+    checkout.mkdir()
+    for entry in (installed.work / CHECKOUT_NAME).iterdir():
+        (checkout / entry.name).symlink_to(entry, target_is_directory=entry.is_dir())
+    return checkout
 
 
 def test_examples_are_found():
-    """The pages do hold runnable examples, and each block's marker parsed (the parametrized test runs them)."""
-    assert len(EXAMPLES) >= 8 and all(e.commands for e in EXAMPLES)
-    pages = {e.page for e in EXAMPLES}
-    assert {"tutorial.md", "how-to/ci.md", "how-to/live-node.md", "how-to/captures-and-logs.md"} <= pages
+    """The pages do hold runnable examples, each block's marker parsed, and the tutorial installs the suite."""
+    runnable = [e for e in EXAMPLES if not e.setup]
+    assert len(runnable) >= 8 and all(e.commands for e in runnable)
+    assert {"tutorial.md", "how-to/ci.md", "how-to/live-node.md", "how-to/captures-and-logs.md"} <= set(PAGES)
+    setups = [e.commands[0].line for e in EXAMPLES if e.setup and e.page == TUTORIAL]
+    assert any("python3 -m venv" in s and "pip install" in s for s in setups), setups
+    for page in PAGES:  # a page other than the tutorial activates the tutorial's environment itself
+        assert page == TUTORIAL or any(e.setup and e.page == page and "activate" in e.commands[0].line
+                                       for e in EXAMPLES), page
 
 
-@pytest.mark.parametrize("example", EXAMPLES, ids=[f"{e.page}:{e.line}" for e in EXAMPLES])
-def test_runnable_example(example, tmp_path):
-    (tmp_path / "tests").symlink_to(CHECKOUT / "tests", target_is_directory=True)
-    port = str(free_udp_port())
-    env = {**os.environ, "COLUMNS": "200", "NO_COLOR": "1"}
-    background = []
+def test_a_clean_shell_has_no_suite(tmp_path):
+    """What the pages run in holds nothing of the test's own environment: imc-conformance is not on its PATH."""
+    shell = Shell(tmp_path, clean_environment(tmp_path), tmp_path)
     try:
-        for command in example.commands:
-            assert command.argv[0] == "imc-conformance", f"{example.page}:{example.line}: only imc-conformance runs"
-            argv = [str(CLI), *(arg.replace("{port}", port) for arg in command.argv[1:])]
-            shown = [line.replace("{port}", port) for line in command.shown]
-            where = f"{example.page}:{example.line}: {shlex.join(command.argv)}"
-            if command.background:
-                proc = subprocess.Popen(argv, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                        text=True)
-                background.append(proc)
-                printed = read_until_shown(proc, shown, timeout=60)
-                assert proc.poll() is None, f"{where}: exited {proc.returncode}:\n{printed}"
-            else:
-                done = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
-                printed = done.stdout + done.stderr
-                assert done.returncode == example.exit, f"{where}: exit {done.returncode}, not {example.exit}:\n{printed}"
-            missing = shown_in(shown, printed)
-            assert missing is None, f"{where}: the page shows {missing!r}, the command printed:\n{printed}"
+        code, printed = shell.run("command -v imc-conformance; python3 -c 'import imc_conformance'", timeout=60)
     finally:
-        for proc in background:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-            proc.stdout.close()
+        shell.close()
+    assert code != 0 and "No module named 'imc_conformance'" in printed, printed
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_runnable_page(page, installed, tmp_path):
+    """Each page's blocks in order, in a shell holding only what the page (and, for the tutorial, its install) set
+    up."""
+    checkout = page_folder(installed, tmp_path)
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    if page == TUTORIAL:
+        env, cwd = {**installed.env, "HOME": str(tmp_path)}, checkout
+    else:
+        env, cwd = clean_environment(tmp_path), tmp_path
+    shell = Shell(cwd, env, logs)
+    try:
+        for example in (e for e in EXAMPLES if e.page == page):
+            if example.setup:
+                if page != TUTORIAL:
+                    run_setup(shell, example)
+                continue
+            port = str(free_udp_port())
+            for command in example.commands:
+                line = command.line.replace(example.port, port) if example.port else command.line
+                shown = [s.replace(example.port, port) for s in command.shown] if example.port else command.shown
+                where = f"{page}:{example.line}: {command.line}"
+                if command.background:
+                    printed = shell.start(line, shown, timeout=60)
+                    assert shell.alive(shell.background[-1]), f"{where}: ended:\n{printed}"
+                else:
+                    code, printed = shell.run(line, timeout=300)
+                    assert code == example.exit, f"{where}: exit {code}, not {example.exit}:\n{printed}"
+                missing = shown_in(shown, printed)
+                assert missing is None, f"{where}: the page shows {missing!r}, the command printed:\n{printed}"
+    finally:
+        shell.close()
 
 
 # --- the site in a browser ----------------------------------------------------------------------------------------
