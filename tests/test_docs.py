@@ -87,7 +87,6 @@ def test_every_page_is_in_the_nav_and_built(site):
     for page in pages:
         built = site / ("index.html" if page == "index.md" else page.removesuffix(".md") + "/index.html")
         assert built.exists(), page
-        assert "<!-- generated:" not in built.read_text(encoding="utf-8"), f"{page}: a marker left unreplaced"
 
 
 def parser_options() -> dict[str, list[str]]:
@@ -252,7 +251,8 @@ class Shell:
         self.proc = subprocess.Popen(["bash", "--noprofile", "--norc"], cwd=cwd, env=env, stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                      start_new_session=True)
-        self.logs, self.background, self.count = logs, [], 0
+        self.logs, self.background, self.count, self.buffer = logs, [], 0, b""
+        self.out = self.proc.stdout.fileno()  # read unbuffered: select() must see what is not yet read
         self._send("set -m")  # background jobs in groups of their own, so that Ctrl-C (SIGINT) reaches them
 
     def _send(self, text: str) -> None:
@@ -264,17 +264,20 @@ class Shell:
         self.count += 1
         token = f"@@done-{self.count}-{os.getpid()}"
         self._send(f"{{ {command}\n}} < /dev/null 2>&1\nprintf '\\n{token} %s\\n' $?")
-        printed, end = [], time.monotonic() + timeout
-        while True:
+        end, marker = time.monotonic() + timeout, f"\n{token} ".encode()
+        while marker not in self.buffer:
             left = end - time.monotonic()
-            if left <= 0 or not select.select([self.proc.stdout], [], [], left)[0]:
-                raise TimeoutError(f"{command!r} did not end within {timeout} s; printed:\n{''.join(printed)}")
-            line = self.proc.stdout.readline()
-            if not line:
-                raise EOFError(f"the shell ended during {command!r}; printed:\n{''.join(printed)}")
-            if line.startswith(token):
-                return int(line.split()[1]), "".join(printed).removesuffix("\n")
-            printed.append(line)
+            if left <= 0 or not select.select([self.out], [], [], left)[0]:
+                raise TimeoutError(f"{command!r} did not end within {timeout} s; printed:\n{self.buffer.decode(errors='replace')}")
+            chunk = os.read(self.out, 1 << 16)
+            if not chunk:
+                raise EOFError(f"the shell ended during {command!r}; printed:\n{self.buffer.decode(errors='replace')}")
+            self.buffer += chunk
+        while not self.buffer.split(marker, 1)[1].count(b"\n"):  # the exit code's line, to its end
+            self.buffer += os.read(self.out, 1 << 16)
+        printed, rest = self.buffer.split(marker, 1)
+        code, self.buffer = rest.split(b"\n", 1)
+        return int(code), printed.decode(errors="replace")
 
     def start(self, command: str, shown: list[str], timeout: float) -> str:
         """A command run in the background (``&``); what it printed once the lines shown have appeared."""
@@ -540,6 +543,22 @@ def test_site_in_chromium(served, tmp_path):
         found = browser.wait_for(search, "Array.from(document.querySelectorAll('.md-search-result__item a'))"
                                          ".map(a => a.getAttribute('href'))")
         assert any("reference/cli/" in href and href.endswith("#adapter-check") for href in found), found
+        for word in ("waiver", "verdict"):  # the JSON Schemas page is kept out of the search
+            hits = browser.wait_for(browser.open(f"{served}/?q={word}"),
+                                    "Array.from(document.querySelectorAll('.md-search-result__item a'))"
+                                    ".map(a => a.getAttribute('href'))")
+            assert hits and not any("reference/schemas/" in href for href in hits), (word, hits)
+
+        tutorial = browser.open(f"{served}/tutorial/")
+        copied = browser.wait_for(tutorial, """(() => {
+            const code = Array.from(document.querySelectorAll('.highlight code'))
+                .find(c => c.innerText.includes('$ imc-conformance --version'));
+            code.setAttribute('data-md-copying', '');  // what Material's copy button sets while it copies
+            const text = code.innerText;
+            code.removeAttribute('data-md-copying');
+            return text;
+        })()""")
+        assert copied.strip() == "imc-conformance --version", repr(copied)  # the command: no prompt, no output
     finally:
         browser.close()
 
@@ -553,6 +572,8 @@ def test_report_screenshot(tmp_path):
     width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
     assert (width, height) == tuple(int(n) for n in tool("screenshot").WINDOW.split(","))
     assert len(data) > 20_000  # a rendered report, not a blank page
+    html = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert "Given (invalid, rule crc)" in html and 'data-field="footer.crc16"' in html  # the frames side by side
 
 
 # --- the README, the front door -----------------------------------------------------------------------------------
@@ -578,3 +599,10 @@ def test_every_page_the_readme_links_is_readable_on_a_forge():
         body = re.sub(r"<!--.*?-->|^#.*$|^---$[\s\S]*?^---$", "", (CHECKOUT / page).read_text(encoding="utf-8"),
                       flags=re.MULTILINE)
         assert len(body.split()) > 150, f"{page}: {len(body.split())} words on a forge"
+
+
+def test_the_python_adapter_shown_is_the_one_run():
+    """The adapter the "write an adapter" page shows is the file its runnable example copies and runs."""
+    page = (DOCS / "how-to" / "adapter.md").read_text(encoding="utf-8")
+    shown = re.search(r"^```python\n(.*?)^```$", page, re.MULTILINE | re.DOTALL).group(1)
+    assert shown == (DOCS / "examples" / "heartbeat_adapter.py").read_text(encoding="utf-8")
