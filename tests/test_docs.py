@@ -576,6 +576,24 @@ def test_report_screenshot(tmp_path):
     assert "Given (invalid, rule crc)" in html and 'data-field="footer.crc16"' in html  # the frames side by side
 
 
+def test_the_report_shows_an_accepted_invalid_frame_and_counts_in_words(tmp_path, capsys):
+    """What the screenshot shows, without a browser: an invalid frame pyimclsts accepted, beside what it read from
+    it, the differing byte named; a header whose start time reads as a date and a time; "1 message", "1 failure"."""
+    from imc_conformance.cli import main
+
+    html, markdown = tmp_path / "r.html", tmp_path / "r.md"
+    code = main(["run", "--adapter", "pyimclsts", "--id", "imc/LblRange/crc/footer-first-byte/le", "--no-progress",
+                 "--html", str(html), "--markdown", str(markdown)])
+    out = capsys.readouterr().out
+    assert code == 1 and "1 case in " in out and "(1 failure is a documented erratum)" in out, out
+    page = html.read_text(encoding="utf-8")
+    assert "Given (invalid, rule crc) · 27 bytes" in page and "Read (what it decoded, encoded by the reference)" in page
+    assert 'data-field="footer.crc16"' in page
+    started = re.search(r'<dt>Started</dt><dd class="when">([^<]*)</dd>', page).group(1)
+    assert re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d.*", started), started
+    assert "**1 case** in 1 message:" in markdown.read_text(encoding="utf-8")
+
+
 # --- the README, the front door -----------------------------------------------------------------------------------
 
 def test_readme_is_a_front_door_into_the_manual():
