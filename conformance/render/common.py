@@ -13,9 +13,9 @@ from ..core.verdicts import ATTENTION, UNTESTED, Verdict
 VERDICTS = tuple(Verdict)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
 
-def counted(n: int, singular: str, plural: str | None = None) -> str:
-    """``1 failure``, ``2 failures``: a count with its noun in the right number."""
-    return f"{n} {singular if n == 1 else plural or singular + 's'}"
+def counted(n: int, noun: str) -> str:
+    """``1 case``, ``2 cases``: a count with its noun in the right number."""
+    return f"{n} {noun if n == 1 else noun + 's'}"
 
 
 def overall(result: RunResult) -> str:
