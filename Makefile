@@ -10,7 +10,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test docs screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters
+.PHONY: conformance test docs reference dist screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -23,6 +23,18 @@ test: $(VENV)/.installed
 docs: $(VENV)/.installed
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs serve --strict --dev-addr 127.0.0.1:8000
+
+# The reference pages' generated parts (command line, adapter contract, schemas, errata, coverage tables), written
+# into docs/reference so that a forge shows them as the site does; tests/test_docs.py fails when one is stale.
+reference: $(VENV)/.installed
+	$(VENV)/bin/python docs/tools/reference.py
+
+# The wheel and the sdist users install (pip install dist/imc_conformance-*.whl), checked with twine as the release
+# workflow (.github/workflows/release.yml) publishes them.
+dist: $(VENV)/.installed
+	rm -rf dist
+	$(VENV)/bin/python -m build --outdir dist .
+	$(VENV)/bin/python -m twine check --strict dist/*
 
 # The screenshot of the HTML report the README and the manual show (Debian's chromium), taken again.
 screenshot: $(VENV)/.installed

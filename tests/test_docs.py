@@ -1,15 +1,27 @@
 """The manual (docs/, mkdocs.yml): built with ``mkdocs build --strict`` into a temporary folder, its runnable examples
-run against the real implementations, the built site opened in Debian's Chromium, and the report screenshot taken.
+run as a newcomer would run them, the built site opened in Debian's Chromium, and the report screenshot taken.
+
+A page is run in a shell (bash) that holds only what the page set up: a clean environment (no virtual environment,
+no PATH but Python's and the system's), the checkout installed by the tutorial's own commands. A block right after a
+line ``<!-- setup -->`` is a ``sh`` block of commands run as written (each must exit 0). The tutorial's setup blocks
+(clone, virtual environment, ``pip install`` with the extras its steps need) run once per test session, in a fresh
+copy of the checkout's files, from a clean shell; its other blocks then run in the shell that left. Every other page
+starts from a clean shell in the folder that holds that checkout and runs its own setup blocks (``cd``, activate).
 
 A runnable example is a ``console`` block right after a line ``<!-- runnable -->``: each ``$ `` line is a command,
-run without a shell from a fresh folder (``tests/data`` of the checkout reachable as ``tests/data``), and the lines
-after it are what it must print, in that order, among its output (``...`` stands for anything, in a line or as a
-line). The marker's ``exit=N`` is the exit code every command of the block must give (0 by default); ``port=P``
-replaces the port P by a free loopback port in the block. A command ending in `` &`` runs in the background until the
-block ends (then Ctrl-C), and must have printed its lines by the next command."""
+and the lines after it are what it must print, in that order, among its output (``...`` stands for anything, in a
+line or as a line). The marker's ``exit=N`` is the exit code every command of the block must give (0 by default);
+``port=P`` replaces the port P by a free loopback port in the block. A command ending in `` &`` runs in the
+background until the page ends (then Ctrl-C), and must have printed its lines by the next command.
+
+pip's cache is the user's (``pip cache dir``) and the suite's download cache is shared, so the install costs a build
+of the suite's wheel and no download once the cache is warm."""
 
 from __future__ import annotations
 
+import base64
+import contextlib
+import fcntl
 import functools
 import http.server
 import importlib.util
@@ -18,6 +30,7 @@ import os
 import re
 import select
 import shlex
+import shutil
 import signal
 import socket
 import subprocess
@@ -32,7 +45,6 @@ import pytest
 CHECKOUT = Path(__file__).resolve().parents[1]
 DOCS = CHECKOUT / "docs"
 TOOLS = DOCS / "tools"
-CLI = Path(sys.executable).with_name("imc-conformance")
 CHROMIUM = Path("/usr/bin/chromium")
 MARKER = re.compile(r"^<!-- runnable((?: \w+=\w+)*) -->\n```console\n(.*?)^```$", re.MULTILINE | re.DOTALL)
 BUILD_ENV = {**os.environ, "NO_MKDOCS_2_WARNING": "1", "PYTHONDONTWRITEBYTECODE": "1"}
@@ -75,7 +87,6 @@ def test_every_page_is_in_the_nav_and_built(site):
     for page in pages:
         built = site / ("index.html" if page == "index.md" else page.removesuffix(".md") + "/index.html")
         assert built.exists(), page
-        assert "<!-- generated:" not in built.read_text(encoding="utf-8"), f"{page}: a marker left unreplaced"
 
 
 def parser_options() -> dict[str, list[str]]:
@@ -101,8 +112,8 @@ def test_cli_reference_holds_every_command_and_option(site):
 
 def test_cli_reference_follows_a_renamed_option(monkeypatch):
     """The page is made from the parsers when the site is built: a renamed option is there, the old name gone."""
-    hooks = tool("hooks")
-    original = hooks.build_parser
+    reference = tool("reference")
+    original = reference.build_parser
 
     def renamed(argv=None):
         text = "\n".join(f"{a.option_strings}" for a in original()._actions)
@@ -114,29 +125,50 @@ def test_cli_reference_follows_a_renamed_option(monkeypatch):
                 action.option_strings = ["--quiet-progress"]
         return parser
 
-    before = hooks.cli_reference()
-    monkeypatch.setattr(hooks, "build_parser", renamed)
-    after = hooks.cli_reference()
+    before = reference.cli_reference()
+    monkeypatch.setattr(reference, "build_parser", renamed)
+    after = reference.cli_reference()
     run_before, run_after = (text.split("## `run`")[1].split("\n## ")[0] for text in (before, after))
     assert "`--no-progress`" in run_before and "`--quiet-progress`" not in run_before
     assert "`--quiet-progress`" in run_after and "`--no-progress`" not in run_after
 
 
-def test_an_unknown_marker_stops_the_build():
-    hooks = tool("hooks")
-
-    class Page:
-        class file:
-            src_uri = "x.md"
+def test_an_unknown_marker_is_an_error():
     with pytest.raises(ValueError, match="no generated part named 'nothing'"):
-        hooks.on_page_markdown("# X\n\n<!-- generated: nothing -->\n", Page, None, None)
+        tool("reference").render("# X\n\n<!-- generated: nothing -->\n", "x.md")
+
+
+def test_reference_pages_are_current():
+    """The generated parts are committed (a forge shows them): each is what ``make reference`` writes today."""
+    reference = tool("reference")
+    assert len(reference.pages()) >= 7
+    stale = [str(p.relative_to(CHECKOUT)) for p in reference.stale()]
+    assert not stale, f"stale reference pages, run make reference: {stale}"
+
+
+def test_a_stale_reference_page_is_found(tmp_path, monkeypatch):
+    reference = tool("reference")
+    page = tmp_path / "cli.md"
+    page.write_text(reference.render("# Command line\n\n<!-- generated: cli -->\n"), encoding="utf-8")
+    monkeypatch.setattr(reference, "PAGES", tmp_path)
+    assert reference.stale() == []
+    page.write_text(page.read_text(encoding="utf-8").replace("--no-progress", "--quiet-progress"), encoding="utf-8")
+    assert reference.stale() == [page]
 
 
 # --- the runnable examples ----------------------------------------------------------------------------------------
 
+SETUP = re.compile(r"^<!-- setup -->\n```sh\n(.*?)^```$", re.MULTILINE | re.DOTALL)
+BLOCK = re.compile(rf"{SETUP.pattern}|{MARKER.pattern}", re.MULTILINE | re.DOTALL)
+TUTORIAL = "tutorial.md"
+CHECKOUT_NAME = "imc-conformance"  # the folder the tutorial's clone makes
+COPY_IGNORE = (".git", ".venv", ".cache", "__pycache__", "*.egg-info", ".pytest_cache", ".hypothesis", "build",
+               "reports", "site", "dist")
+
+
 @dataclass
 class Command:
-    argv: list[str]
+    line: str
     shown: list[str] = field(default_factory=list)
     background: bool = False
 
@@ -147,31 +179,35 @@ class Example:
     line: int
     exit: int
     commands: list[Command]
+    setup: bool = False
+    port: str | None = None
 
 
 def examples() -> list[Example]:
+    """Every setup block and runnable example of the manual, page by page, in order."""
     out = []
     for path in sorted(DOCS.rglob("*.md")):
         text = path.read_text(encoding="utf-8")
-        for match in MARKER.finditer(text):
-            options = dict(o.split("=") for o in match.group(1).split())
-            body = match.group(2)
-            if "port" in options:
-                body = body.replace(options["port"], "{port}")
+        for match in BLOCK.finditer(text):
+            where = (str(path.relative_to(DOCS)), text[:match.start()].count("\n") + 1)
+            if match.group(1) is not None:
+                out.append(Example(*where, 0, [Command(match.group(1))], setup=True))
+                continue
+            options = dict(o.split("=") for o in match.group(2).split())
             commands = []
-            for line in body.splitlines():
+            for line in match.group(3).splitlines():
                 if line.startswith("$ "):
-                    argv = shlex.split(line[2:])
-                    background = argv[-1] == "&"
-                    commands.append(Command(argv[:-1] if background else argv, background=background))
+                    background = line.rstrip().endswith(" &")
+                    commands.append(Command(line[2:].rstrip().removesuffix("&").rstrip() if background else line[2:],
+                                            background=background))
                 else:
                     commands[-1].shown.append(line)
-            out.append(Example(str(path.relative_to(DOCS)), text[:match.start()].count("\n") + 1,
-                               int(options.get("exit", 0)), commands))
+            out.append(Example(*where, int(options.get("exit", 0)), commands, port=options.get("port")))
     return out
 
 
 EXAMPLES = examples()
+PAGES = sorted({e.page for e in EXAMPLES if not e.setup})
 
 
 def shown_in(shown: list[str], printed: str) -> str | None:
@@ -193,57 +229,215 @@ def free_udp_port() -> int:
         return probe.getsockname()[1]
 
 
-def read_until_shown(proc: subprocess.Popen, shown: list[str], timeout: float) -> str:
-    printed, end = "", time.monotonic() + timeout
-    while shown_in(shown, printed) is not None and time.monotonic() < end:
-        if select.select([proc.stdout], [], [], 0.1)[0]:
-            line = proc.stdout.readline()
-            if not line:
+def clean_environment(home: Path) -> dict[str, str]:
+    """What a newcomer's fresh shell holds: Python's and the system's folders on PATH, and nothing installed. The
+    machine's pip settings and proxies are kept (how it reaches PyPI), and pip's and the suite's caches are the
+    user's (speed only: what they hold is what the registries serve)."""
+    user = Path.home()
+    env = {"PATH": f"{Path(sys.base_prefix) / 'bin'}:/usr/local/bin:/usr/bin:/bin", "HOME": str(home),
+           "LANG": "C.UTF-8", "TERM": "dumb", "COLUMNS": "200", "NO_COLOR": "1",
+           "PIP_CACHE_DIR": os.environ.get("PIP_CACHE_DIR", str(user / ".cache" / "pip")),
+           "IMC_CONFORMANCE_CACHE": os.environ.get("IMC_CONFORMANCE_CACHE", str(user / ".cache" / "imc-conformance"))}
+    env.update({k: v for k, v in os.environ.items() if k.startswith("PIP_") or k.lower().endswith("_proxy")})
+    env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
+    return env
+
+
+class Shell:
+    """A bash the test types into, as a reader types the page's commands: state (cd, an activated virtual
+    environment) carries from one command to the next; each command's output and exit code are read back."""
+
+    def __init__(self, cwd: Path, env: dict[str, str], logs: Path):
+        self.proc = subprocess.Popen(["bash", "--noprofile", "--norc"], cwd=cwd, env=env, stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                     start_new_session=True)
+        self.logs, self.background, self.count, self.buffer = logs, [], 0, b""
+        self.out = self.proc.stdout.fileno()  # read unbuffered: select() must see what is not yet read
+        self._send("set -m")  # background jobs in groups of their own, so that Ctrl-C (SIGINT) reaches them
+
+    def _send(self, text: str) -> None:
+        self.proc.stdin.write(text + "\n")
+        self.proc.stdin.flush()
+
+    def run(self, command: str, timeout: float) -> tuple[int, str]:
+        """The command's exit code and everything it printed."""
+        self.count += 1
+        token = f"@@done-{self.count}-{os.getpid()}"
+        self._send(f"{{ {command}\n}} < /dev/null 2>&1\nprintf '\\n{token} %s\\n' $?")
+        end, marker = time.monotonic() + timeout, f"\n{token} ".encode()
+        while marker not in self.buffer:
+            left = end - time.monotonic()
+            if left <= 0 or not select.select([self.out], [], [], left)[0]:
+                raise TimeoutError(f"{command!r} did not end within {timeout} s; printed:\n{self.buffer.decode(errors='replace')}")
+            chunk = os.read(self.out, 1 << 16)
+            if not chunk:
+                raise EOFError(f"the shell ended during {command!r}; printed:\n{self.buffer.decode(errors='replace')}")
+            self.buffer += chunk
+        while not self.buffer.split(marker, 1)[1].count(b"\n"):  # the exit code's line, to its end
+            self.buffer += os.read(self.out, 1 << 16)
+        printed, rest = self.buffer.split(marker, 1)
+        code, self.buffer = rest.split(b"\n", 1)
+        return int(code), printed.decode(errors="replace")
+
+    def start(self, command: str, shown: list[str], timeout: float) -> str:
+        """A command run in the background (``&``); what it printed once the lines shown have appeared."""
+        log = self.logs / f"background-{self.count + 1}.log"
+        code, pid = self.run(f"{command} > {shlex.quote(str(log))} 2>&1 &\necho $!", timeout=10)
+        self.background.append(int(pid.split()[-1]))
+        end = time.monotonic() + timeout
+        printed = ""
+        while time.monotonic() < end:
+            printed = log.read_text(errors="replace") if log.exists() else ""
+            if shown_in(shown, printed) is None:
                 break
-            printed += line
-    return printed
+            time.sleep(0.1)
+        return printed
+
+    def alive(self, pid: int) -> bool:
+        return self.run(f"kill -0 {pid} 2>/dev/null", timeout=10)[0] == 0
+
+    def close(self) -> None:
+        for pid in self.background:
+            try:
+                os.killpg(pid, signal.SIGINT)
+            except ProcessLookupError:
+                continue
+            end = time.monotonic() + 10
+            while time.monotonic() < end and self.alive(pid):
+                time.sleep(0.1)
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(pid, signal.SIGKILL)
+        with contextlib.suppress(BrokenPipeError):
+            self._send("exit")
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+        self.proc.stdin.close()
+        self.proc.stdout.close()
+
+
+def run_setup(shell: Shell, example: Example) -> None:
+    code, printed = shell.run(example.commands[0].line, timeout=900)
+    assert code == 0, f"{example.page}:{example.line}: a setup block exited {code}:\n{printed[-4000:]}"
+
+
+@dataclass
+class Installed:
+    """The tutorial's install, done once: the folder holding the checkout and the environment its shell left."""
+    work: Path
+    env: dict[str, str]
+    cwd: Path
+    seconds: float
+
+
+def _install(work: Path) -> Installed:
+    """The tutorial's setup blocks from a clean shell in ``work``, where the clone is a copy of the checkout's files."""
+    shutil.copytree(CHECKOUT, work / CHECKOUT_NAME, symlinks=True, ignore=shutil.ignore_patterns(*COPY_IGNORE))
+    (work / "home").mkdir()
+    shell = Shell(work, clean_environment(work / "home"), work)
+    started = time.monotonic()
+    try:
+        for example in EXAMPLES:
+            if example.page == TUTORIAL and example.setup:
+                lines = example.commands[0].line.splitlines()
+                kept = "\n".join(line for line in lines if not line.startswith("git clone "))
+                run_setup(shell, Example(example.page, example.line, 0, [Command(kept)], setup=True))
+        code, dump = shell.run("pwd; env -0 | base64 -w0", timeout=10)
+    finally:
+        shell.close()
+    cwd, encoded = dump.splitlines()[-2:]
+    env = dict(item.split("=", 1) for item in base64.b64decode(encoded).decode().split("\0") if "=" in item)
+    for name in ("PWD", "OLDPWD", "SHLVL", "_"):
+        env.pop(name, None)
+    return Installed(work, env, Path(cwd), time.monotonic() - started)
+
+
+@pytest.fixture(scope="session")
+def installed(tmp_path_factory) -> Installed:
+    """Once per test session, shared by pytest-xdist's workers (the first to come installs, under a lock)."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent
+    work, state = root / "docs-install", root / "docs-install.json"
+    with open(root / "docs-install.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not state.exists():
+            if work.exists():
+                shutil.rmtree(work)
+            work.mkdir()
+            done = _install(work)
+            state.write_text(json.dumps({"env": done.env, "cwd": str(done.cwd), "seconds": done.seconds}))
+        saved = json.loads(state.read_text())
+    return Installed(work, saved["env"], Path(saved["cwd"]), saved["seconds"])
+
+
+def page_folder(installed: Installed, tmp_path: Path) -> Path:
+    """A folder of the page's own, laid out as the tutorial left its reader's (the checkout, its files linked), so
+    that what one page writes never meets another's."""
+    checkout = tmp_path / CHECKOUT_NAME
+    checkout.mkdir()
+    for entry in (installed.work / CHECKOUT_NAME).iterdir():
+        (checkout / entry.name).symlink_to(entry, target_is_directory=entry.is_dir())
+    return checkout
 
 
 def test_examples_are_found():
-    """The pages do hold runnable examples, and each block's marker parsed (the parametrized test runs them)."""
-    assert len(EXAMPLES) >= 8 and all(e.commands for e in EXAMPLES)
-    pages = {e.page for e in EXAMPLES}
-    assert {"tutorial.md", "how-to/ci.md", "how-to/live-node.md", "how-to/captures-and-logs.md"} <= pages
+    """The pages do hold runnable examples, each block's marker parsed, and the tutorial installs the suite."""
+    runnable = [e for e in EXAMPLES if not e.setup]
+    assert len(runnable) >= 8 and all(e.commands for e in runnable)
+    assert {"tutorial.md", "how-to/ci.md", "how-to/live-node.md", "how-to/captures-and-logs.md"} <= set(PAGES)
+    setups = [e.commands[0].line for e in EXAMPLES if e.setup and e.page == TUTORIAL]
+    assert any("python3 -m venv" in s and "pip install" in s for s in setups), setups
+    for page in PAGES:  # a page other than the tutorial activates the tutorial's environment itself
+        assert page == TUTORIAL or any(e.setup and e.page == page and "activate" in e.commands[0].line
+                                       for e in EXAMPLES), page
 
 
-@pytest.mark.parametrize("example", EXAMPLES, ids=[f"{e.page}:{e.line}" for e in EXAMPLES])
-def test_runnable_example(example, tmp_path):
-    (tmp_path / "tests").symlink_to(CHECKOUT / "tests", target_is_directory=True)
-    port = str(free_udp_port())
-    env = {**os.environ, "COLUMNS": "200", "NO_COLOR": "1"}
-    background = []
+def test_a_clean_shell_has_no_suite(tmp_path):
+    """What the pages run in holds nothing of the test's own environment: imc-conformance is not on its PATH."""
+    shell = Shell(tmp_path, clean_environment(tmp_path), tmp_path)
     try:
-        for command in example.commands:
-            assert command.argv[0] == "imc-conformance", f"{example.page}:{example.line}: only imc-conformance runs"
-            argv = [str(CLI), *(arg.replace("{port}", port) for arg in command.argv[1:])]
-            shown = [line.replace("{port}", port) for line in command.shown]
-            where = f"{example.page}:{example.line}: {shlex.join(command.argv)}"
-            if command.background:
-                proc = subprocess.Popen(argv, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                        text=True)
-                background.append(proc)
-                printed = read_until_shown(proc, shown, timeout=60)
-                assert proc.poll() is None, f"{where}: exited {proc.returncode}:\n{printed}"
-            else:
-                done = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
-                printed = done.stdout + done.stderr
-                assert done.returncode == example.exit, f"{where}: exit {done.returncode}, not {example.exit}:\n{printed}"
-            missing = shown_in(shown, printed)
-            assert missing is None, f"{where}: the page shows {missing!r}, the command printed:\n{printed}"
+        code, printed = shell.run("command -v imc-conformance; python3 -c 'import imc_conformance'", timeout=60)
     finally:
-        for proc in background:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-            proc.stdout.close()
+        shell.close()
+    assert code != 0 and "No module named 'imc_conformance'" in printed, printed
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_runnable_page(page, installed, tmp_path):
+    """Each page's blocks in order, in a shell holding only what the page (and, for the tutorial, its install) set
+    up."""
+    checkout = page_folder(installed, tmp_path)
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    if page == TUTORIAL:
+        env, cwd = {**installed.env, "HOME": str(tmp_path)}, checkout
+    else:
+        env, cwd = clean_environment(tmp_path), tmp_path
+    shell = Shell(cwd, env, logs)
+    try:
+        for example in (e for e in EXAMPLES if e.page == page):
+            if example.setup:
+                if page != TUTORIAL:
+                    run_setup(shell, example)
+                continue
+            port = str(free_udp_port())
+            for command in example.commands:
+                line = command.line.replace(example.port, port) if example.port else command.line
+                shown = [s.replace(example.port, port) for s in command.shown] if example.port else command.shown
+                where = f"{page}:{example.line}: {command.line}"
+                if command.background:
+                    printed = shell.start(line, shown, timeout=60)
+                    assert shell.alive(shell.background[-1]), f"{where}: ended:\n{printed}"
+                else:
+                    code, printed = shell.run(line, timeout=300)
+                    assert code == example.exit, f"{where}: exit {code}, not {example.exit}:\n{printed}"
+                missing = shown_in(shown, printed)
+                assert missing is None, f"{where}: the page shows {missing!r}, the command printed:\n{printed}"
+    finally:
+        shell.close()
 
 
 # --- the site in a browser ----------------------------------------------------------------------------------------
@@ -349,6 +543,22 @@ def test_site_in_chromium(served, tmp_path):
         found = browser.wait_for(search, "Array.from(document.querySelectorAll('.md-search-result__item a'))"
                                          ".map(a => a.getAttribute('href'))")
         assert any("reference/cli/" in href and href.endswith("#adapter-check") for href in found), found
+        for word in ("waiver", "verdict"):  # the JSON Schemas page is kept out of the search
+            hits = browser.wait_for(browser.open(f"{served}/?q={word}"),
+                                    "Array.from(document.querySelectorAll('.md-search-result__item a'))"
+                                    ".map(a => a.getAttribute('href'))")
+            assert hits and not any("reference/schemas/" in href for href in hits), (word, hits)
+
+        tutorial = browser.open(f"{served}/tutorial/")
+        copied = browser.wait_for(tutorial, """(() => {
+            const code = Array.from(document.querySelectorAll('.highlight code'))
+                .find(c => c.innerText.includes('$ imc-conformance --version'));
+            code.setAttribute('data-md-copying', '');  // what Material's copy button sets while it copies
+            const text = code.innerText;
+            code.removeAttribute('data-md-copying');
+            return text;
+        })()""")
+        assert copied.strip() == "imc-conformance --version", repr(copied)  # the command: no prompt, no output
     finally:
         browser.close()
 
@@ -362,6 +572,26 @@ def test_report_screenshot(tmp_path):
     width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
     assert (width, height) == tuple(int(n) for n in tool("screenshot").WINDOW.split(","))
     assert len(data) > 20_000  # a rendered report, not a blank page
+    html = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert "Given (invalid, rule crc)" in html and 'data-field="footer.crc16"' in html  # the frames side by side
+
+
+def test_the_report_shows_an_accepted_invalid_frame_and_counts_in_words(tmp_path, capsys):
+    """What the screenshot shows, without a browser: an invalid frame pyimclsts accepted, beside what it read from
+    it, the differing byte named; a header whose start time reads as a date and a time; "1 message", "1 failure"."""
+    from imc_conformance.cli import main
+
+    html, markdown = tmp_path / "r.html", tmp_path / "r.md"
+    code = main(["run", "--adapter", "pyimclsts", "--id", "imc/LblRange/crc/footer-first-byte/le", "--no-progress",
+                 "--html", str(html), "--markdown", str(markdown)])
+    out = capsys.readouterr().out
+    assert code == 1 and "1 case in " in out and "(1 failure is a documented erratum)" in out, out
+    page = html.read_text(encoding="utf-8")
+    assert "Given (invalid, rule crc) · 27 bytes" in page and "Read (what it decoded, encoded by the reference)" in page
+    assert 'data-field="footer.crc16"' in page
+    started = re.search(r'<dt>Started</dt><dd class="when">([^<]*)</dd>', page).group(1)
+    assert re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d.*", started), started
+    assert "**1 case** in 1 message:" in markdown.read_text(encoding="utf-8")
 
 
 # --- the README, the front door -----------------------------------------------------------------------------------
@@ -384,3 +614,22 @@ def test_the_waivers_page_shows_the_file_the_command_wrote():
     shown = re.search(r"^```json\n(.*?)^```$", page, re.MULTILINE | re.DOTALL).group(1)
     kept = (CHECKOUT / "tests" / "data" / "pyimclsts-waivers.json").read_text(encoding="utf-8")
     assert json.loads(shown) == json.loads(kept) and len(json.loads(kept)["waivers"]) == 7
+
+
+def test_every_page_the_readme_links_is_readable_on_a_forge():
+    """A forge shows the Markdown as committed: every page the README links holds text beyond its heading and
+    markers (the reference pages' generated parts included)."""
+    text = (CHECKOUT / "README.md").read_text(encoding="utf-8")
+    pages = {t for t in re.findall(r"\]\(([^)\s#]+\.md)(?:#[^)]*)?\)", text) if not t.startswith("http")}
+    assert "docs/reference/cli.md" in pages and "docs/reference/schemas.md" in pages
+    for page in sorted(pages):
+        body = re.sub(r"<!--.*?-->|^#.*$|^---$[\s\S]*?^---$", "", (CHECKOUT / page).read_text(encoding="utf-8"),
+                      flags=re.MULTILINE)
+        assert len(body.split()) > 150, f"{page}: {len(body.split())} words on a forge"
+
+
+def test_the_python_adapter_shown_is_the_one_run():
+    """The adapter the "write an adapter" page shows is the file its runnable example copies and runs."""
+    page = (DOCS / "how-to" / "adapter.md").read_text(encoding="utf-8")
+    shown = re.search(r"^```python\n(.*?)^```$", page, re.MULTILINE | re.DOTALL).group(1)
+    assert shown == (DOCS / "examples" / "heartbeat_adapter.py").read_text(encoding="utf-8")

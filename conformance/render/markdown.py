@@ -7,7 +7,7 @@ import re
 from ..core.verdicts import Verdict
 from ..core.results import RunResult
 from ..escaping import clean
-from .common import TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines, verdict_columns
+from .common import TIMELINE_LIMIT, attention, cause_numbers, counted, errata_text, incident_lines, overall, provenance_lines, verdict_columns
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",
@@ -42,7 +42,7 @@ def render_markdown(result: RunResult) -> str:
         f"## {OVERALL[verdict]} {cell(result.title)} conformance: {verdict} — {cell(result.implementation)} · "
         f"{cell(result.edition)}",
         "",
-        f"**{total} cases** in {len(result.messages)} messages: "
+        f"**{counted(total, 'case')}** in {counted(len(result.messages), 'message')}: "
         + ", ".join(f"{EMOJI[Verdict(v)]} {n} {v}" for v, n in result.summary.items())
         + f" · adapter {cell(result.adapter)} · {result.duration:.1f} s · {cell(result.started)}"
         + (" · strict" if result.strict else ""),

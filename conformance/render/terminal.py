@@ -14,7 +14,7 @@ from rich.table import Table
 from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
 from ..escaping import printable
-from .common import cause_line, incident_lines, provenance_lines, timeline_lines
+from .common import cause_line, counted, incident_lines, provenance_lines, timeline_lines
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
 SHOWN_FAILURES = 20
@@ -87,5 +87,6 @@ def print_result(result: RunResult, console: Console) -> None:
         console.print(f"[dim]{safe(line[:600])}[/]")
     summary = ", ".join(f"{n} {v}" for v, n in result.summary.items())
     explained = sum(1 for c in shown if c.errata)
-    console.print(f"{len(result.cases)} cases in {result.duration:.2f} s: {summary}"
-                  + (f" ({explained} failures are documented errata)" if explained else ""))
+    errata = "1 failure is a documented erratum" if explained == 1 else f"{explained} failures are documented errata"
+    console.print(f"{counted(len(result.cases), 'case')} in {result.duration:.2f} s: {summary}"
+                  + (f" ({errata})" if explained else ""))

@@ -187,7 +187,7 @@ class VectorKind:
         if compiled.expect == "valid":
             return self._valid(case, compiled, edition, request, answer)
         if compiled.expect == "invalid":
-            return self._invalid(case, request, answer)
+            return self._invalid(case, edition, request, answer)
         return self._acceptable(case, compiled, edition, request, answer)
 
     def _describe(self, case, edition, request, answer) -> CheckResult:
@@ -225,11 +225,12 @@ class VectorKind:
             return self.failure(case, edition, request, "", expected, answer.frame, locate=True)
         return CheckResult(check, Verdict.PASS, VALID_PASS[request.op])
 
-    def _invalid(self, case, request, answer) -> CheckResult:
+    def _invalid(self, case, edition, request, answer) -> CheckResult:
         check, rule = request.check, case["rule"]
+        if answer.kind == "ok" and request.op == "decode" and request.frame is not None:
+            return self.accepted(case, edition, request, answer, f"accepted an invalid frame (rule {rule})")
         if answer.kind == "ok":
-            what = "accepted an invalid frame" if request.op == "decode" else "encoded a message it must refuse"
-            return CheckResult(check, Verdict.FAIL, f"{what} (rule {rule})")
+            return CheckResult(check, Verdict.FAIL, f"encoded a message it must refuse (rule {rule})")
         broken = (*case.get("flaws", {}).get("rules", (rule,)), *(() if "practice" not in case else (case["practice"],)))
         if answer.rule is not None and answer.rule not in broken:
             named = " or ".join(repr(r) for r in broken)
@@ -304,6 +305,14 @@ class VectorKind:
             detail += frame_difference(expected, actual, spans)
         return CheckResult(request.check, Verdict.FAIL, detail, expected=expected.hex(),
                            actual=None if actual is None else actual.hex(), diffs=byte_diffs(expected, actual, spans))
+
+    def accepted(self, case: dict, edition: str, request: Request, answer, detail: str) -> CheckResult:
+        """A FAIL for an invalid frame decoded: it keeps the frame given and the reference's encoding of what the
+        implementation read from it (where that encodes), the differing bytes named by the fields of the latter."""
+        read = self.reencoded(answer.message, request.encoding, edition)
+        spans = [] if read is None else self._spans(read, request.encoding, case, edition)
+        return CheckResult(request.check, Verdict.FAIL, detail, expected=request.frame.hex(),
+                           actual=None if read is None else read.hex(), diffs=byte_diffs(request.frame, read, spans))
 
     def _spans(self, frame: bytes, encoding: str, case: dict, edition: str) -> list[Span]:
         try:
