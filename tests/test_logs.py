@@ -17,7 +17,9 @@ import random
 import re
 import shutil
 import struct
+import subprocess
 import sys
+import zlib
 from pathlib import Path
 
 import pytest
@@ -297,6 +299,21 @@ def test_logs_with_different_definitions_beside_them_are_judged_one_at_a_time(lo
     assert code == 2 and "the logs come with different definitions beside them: judge them one at a time" in one_line(out)
 
 
+def test_many_logs_are_opened_one_at_a_time(log, tmp_path):
+    """150 logs under a limit of 128 open files: each is opened, judged and closed before the next."""
+    part = gzip.compress(log[:frame_ends(log)[9]])
+    names = []
+    for i in range(150):
+        (tmp_path / f"{i:03d}.lsf.gz").write_bytes(part)
+        names.append(f"{i:03d}.lsf.gz")
+    program = ("import resource, sys; resource.setrlimit(resource.RLIMIT_NOFILE, (128, 128)); "
+               "from imc_conformance.cli import main; sys.exit(main(['log', *sys.argv[1:]]))")
+    done = subprocess.run([sys.executable, "-c", program, *names, "--json", "r.json"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert report(tmp_path / "r.json")["read"].startswith("1,500 frames read, 1,500 judged")
+
+
 def test_what_the_judge_remembers_of_frames_stays_small(tmp_path):
     """Decoded payloads are remembered to judge repeats at once, but not a large one, nor the fields of a valid
     frame no exchange reads: a log of gigabytes of distinct frames does not fill the memory."""
@@ -371,6 +388,71 @@ def test_a_gzip_bomb_is_refused_in_bounded_memory(log, tmp_path, capsys, monkeyp
     assert code == 2 and "Traceback" not in out.err
     assert "more than 200 times their size (no log compresses so well: a decompression bomb?): refused" in lines[0]
     assert report(tmp_path / "r.json")["read"].startswith("600 frames read")
+
+
+def test_a_gzip_bomb_of_valid_frames_is_refused_at_the_floor_against_the_bytes_consumed(tmp_path, capsys, monkeypatch):
+    """The ratio is taken against the compressed bytes the decoder consumed, not those read ahead: a bomb is refused
+    once past the floor, however large the piece read at once."""
+    monkeypatch.setattr(streams, "BOMB_FLOOR", 1 << 20)
+    monkeypatch.setattr(streams, "PIECE", 64 << 10)
+    frame = heartbeats(1.7e9, 1)
+    (tmp_path / "Data.lsf.gz").write_bytes(gzip.compress(frame * ((16 << 20) // len(frame)), 9))
+    code, out = run(tmp_path / "Data.lsf.gz", "--json", tmp_path / "r.json", capsys=capsys)
+    assert code == 2 and "a decompression bomb?): refused from there" in one_line(out)
+    read = int(report(tmp_path / "r.json")["read"].split()[0].replace(",", ""))
+    assert read * len(frame) <= (1 << 20) + (64 << 10)  # the floor and one piece, not 200 times the piece read
+
+
+def members(data: bytes, size: int) -> list[bytes]:
+    """``data`` as gzip members of about ``size`` bytes each, each ending at a frame's end (as DUNE's do)."""
+    out, begin = [], 0
+    for end in frame_ends(data):
+        if end - begin >= size or end == len(data):
+            out.append(gzip.compress(data[begin:end]))
+            begin = end
+    return out
+
+
+def whole_frames(data: bytes) -> int:
+    return sum(1 for end in frame_ends(data) if end <= len(data)) - (frame_ends(data)[-1] > len(data))
+
+
+def test_a_gzip_member_cut_in_the_middle_of_a_log(log, tmp_path, capsys):
+    """Every frame before the cut is judged, none made of the next member's bytes; one line names the byte."""
+    parts = members(log, 6000)
+    k = len(parts) // 2
+    cut = parts[k][:len(parts[k]) // 2]
+    (tmp_path / "Data.lsf.gz").write_bytes(b"".join(parts[:k]) + cut + b"".join(parts[k + 1:]))
+    intact = b"".join(gzip.decompress(p) for p in parts[:k]) + zlib.decompressobj(31).decompress(cut)
+    code, out = run(tmp_path / "Data.lsf.gz", "--json", tmp_path / "r.json", capsys=capsys)
+    at = sum(map(len, parts[:k])) + len(cut)
+    assert code == 2 and f"is cut at byte {at:,}, where another member begins" in one_line(out)
+    doc = report(tmp_path / "r.json")
+    intact_frames = len([e for e in frame_ends(log) if e <= len(intact)])
+    assert doc["read"].startswith(f"{intact_frames:,} frames read") and set(doc["verdicts"].values()) == {"PASS"}
+
+
+def test_a_bzip2_log_cut_short_is_one_line_with_every_whole_block_judged(tmp_path, capsys):
+    data = gzip.decompress(EXCERPT.read_bytes())
+    packed = bz2.compress(data, 1)  # blocks of 100 kB
+    cut = packed[:len(packed) * 7 // 10]
+    (tmp_path / "Data.lsf.bz2").write_bytes(cut)
+    made = bz2.BZ2Decompressor().decompress(cut)  # every whole block
+    code, out = run(tmp_path / "Data.lsf.bz2", "--json", tmp_path / "r.json", capsys=capsys)
+    assert code == 2 and f"is cut short at byte {len(cut):,}, the end of the file" in one_line(out)
+    frames = len([e for e in frame_ends(data) if e <= len(made)])
+    assert report(tmp_path / "r.json")["read"].startswith(f"{frames:,} frames read")
+
+
+def test_damaged_gzip_data_is_one_line_naming_its_byte(log, tmp_path, capsys):
+    """Damaged deflate data decompresses on into garbage until the member's CRC-32 says so: the member's frames are
+    not judged (no frame of garbage fails as the log's), and one line says where zlib found the damage."""
+    packed = bytearray(gzip.compress(log))
+    packed[len(packed) // 2:len(packed) // 2 + 8] = bytes(8)
+    (tmp_path / "Data.lsf.gz").write_bytes(bytes(packed))
+    code, out = run(tmp_path / "Data.lsf.gz", capsys=capsys)
+    assert code == 2 and re.search(r"damaged gzip data at byte [\d,]+, in the member that begins at byte 0 \(zlib: ",
+                                   one_line(out))
 
 
 def test_garbage_after_a_bzip2_stream_is_ignored_in_one_line(log, tmp_path, capsys):

@@ -55,4 +55,7 @@ class LogReader(Protocol):
 
     def units(self, pieces: Iterator[bytes], damage: list[str], name: str) -> Iterator[Logged | Finding]:
         """Every frame of the log (decompressed ``pieces``), and findings on what it says of them; what cannot be
-        read is appended to ``damage`` (one line each, naming the log as ``name``) and ends the reading."""
+        read is appended to ``damage`` (one line each, naming the log as ``name``) and ends the reading. ``damage``
+        is the stream's own list: a line in it when the pieces end says they stopped at damage (a compressed stream
+        damaged or cut), and the reader adds none about the bytes left, which are not the log's end (one line for
+        one damage)."""

@@ -52,6 +52,9 @@ class LsfReader:
         skipped, ids = _Skipped(), self.ids
         for piece in chain(pieces, (b"",)):  # then b"": the end of the log
             last = not piece
+            if last and damage:  # the stream stopped at damage it said: the bytes left are no end of the log
+                pos = len(buf)
+                break
             buf, base, pos = buf[pos:] + piece, base + pos, 0
             n = len(buf)
             while pos < n:

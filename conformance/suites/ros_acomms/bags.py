@@ -88,10 +88,11 @@ class BagReader:
             damage.append(f"{name}: {exc}: the bag is read up to it")
         except Short as exc:
             where = f"at byte {bag.src.offset + exc.got:,}, inside the record that begins at byte {bag.record:,}"
-            damage.append(f"{name}: its index is cut short {where}: every chunk before it was read" if bag.index_begins
-                          else f"{name}: the bag ends {where} (cut short): read up to it")
+            if not damage:  # else the stream stopped at damage it said: the bag does not end here
+                damage.append(f"{name}: its index is cut short {where}: every chunk before it was read"
+                              if bag.index_begins else f"{name}: the bag ends {where} (cut short): read up to it")
         else:
-            damage += [f"{name}: {problem}" for problem in bag.index_problems()]
+            damage += [] if damage else [f"{name}: {problem}" for problem in bag.index_problems()]
         self.notes += bag.summary(name)
 
 
