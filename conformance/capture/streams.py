@@ -1,10 +1,11 @@
 """The bytes of a log file, read in bounded pieces and decompressed as they come: plain, gzip (every member of a
 multi-member file, as loggers that flush write them) or bzip2 (every stream), told apart by their content, not
 their name. Memory stays flat whatever the size: each piece is at most ``PIECE`` bytes before and after
-decompression. What cannot be read is said in ``damage`` (one line each), never raised, after the pieces before it:
-a stream cut short, bytes after the last stream, damaged compressed data, and output beyond ``BOMB_RATIO`` times the
-compressed input read (no real log compresses so well: a decompression bomb is refused, not followed into the
-memory or the hours it asks for).
+decompression (a gzip member's output is held until its CRC checks, up to ``HOLD``). What cannot be read is said in
+``damage`` (one line each, naming its byte), never raised, after the pieces before it: a stream cut short, a gzip
+member cut where another begins, bytes after the last stream, damaged compressed data, and output beyond
+``BOMB_RATIO`` times the compressed bytes consumed past ``BOMB_FLOOR`` (no real log compresses so well: a
+decompression bomb is refused, not followed into the memory or the hours it asks for).
 
 Hand-written around the standard library's zlib and bz2 rather than the gzip and bz2 modules' file objects: those
 raise at trailing garbage and at a cut stream without saying how far they got.
