@@ -574,3 +574,15 @@ def test_a_damaged_log_is_judged_or_refused_never_a_crash(small_logs, which, edi
         judge.logged(unit)
     judge.result(implementation="fuzz", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False, title="IMC")
     assert all("\n" not in line for line in damage + stream.damage)
+
+
+def test_a_logs_cause_is_told_in_words_about_the_log(log, tmp_path, capsys):
+    damaged = bytearray(log)
+    damaged[frame_ends(log)[9] + 25] ^= 0x40
+    (tmp_path / "Data.lsf").write_bytes(bytes(damaged))
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    causes = json.loads((tmp_path / "r.json").read_text())["causes"]
+    titles = dict((c["key"], c["title"]) for c in causes)
+    assert code == 1 and titles["recorded/rule:crc"] == "recorded frames that break rule crc"
+    assert all(key.startswith("recorded/") for key in titles)
+    assert "passes what breaks" not in out.out

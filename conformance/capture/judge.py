@@ -285,7 +285,7 @@ class CaptureJudge:
         return sorted(by_group.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0]))
 
     def notes(self) -> list[str]:
-        seconds = self.stretched + self.last - self.begun if self.log else self.last - self.origin
+        seconds = self.stretched + self.last - self.begun if self.log else self.last - (self.origin or 0.0)
         span = f", from {_when(self.origin)} for {seconds:.3f} s" if self.origin else ""
         if self.log:
             out = [f"{self.records:,} frames read, {self.datagrams:,} judged{span}"]
