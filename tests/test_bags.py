@@ -403,3 +403,12 @@ def test_a_damaged_bz2_chunk_is_described_as_libbz2_says(tmp_path):
     _, damage, _ = read(tmp_path / "bad.bag")
     assert damage == ["bad.bag: the chunk at byte 13 is damaged bz2 data (Invalid data stream): the bag is read up to "
                       "it"]
+
+
+def test_src_dst_and_host_do_not_apply_to_a_bag(tmp_path, capsys):
+    bag = edition_bag(tmp_path / "b.bag", "seed")
+    for option in ("--src", "--dst", "--host"):
+        code, out = run(bag, option, "30", capsys=capsys)
+        err = out.err
+        assert code == 2 and err.count("\n") == 1, err
+        assert "--src, --dst and --host do not apply to a ROS 1 bag: its messages name no system" in err

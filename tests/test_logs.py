@@ -586,3 +586,13 @@ def test_a_logs_cause_is_told_in_words_about_the_log(log, tmp_path, capsys):
     assert code == 1 and titles["recorded/rule:crc"] == "recorded frames that break rule crc"
     assert all(key.startswith("recorded/") for key in titles)
     assert "passes what breaks" not in out.out
+
+
+def test_an_edition_the_xml_beside_the_log_lacks_names_the_suite_that_has_it(log, tmp_path, capsys):
+    (tmp_path / "Data.lsf").write_bytes(log)
+    (tmp_path / "IMC.xml").write_bytes(fetch_imc_xml().read_bytes())
+    code, out = run(tmp_path / "Data.lsf", "--edition", "imc-5.4.11", capsys=capsys)
+    line = one_line(out)
+    assert code == 2 and "have no edition 'imc-5.4.11': --suite imc judges it by the suite's own" in line
+    code, out = run(tmp_path / "Data.lsf", "--edition", "imc-5.4.11", "--suite", "imc", capsys=capsys)
+    assert code == 0, out.err

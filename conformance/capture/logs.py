@@ -44,6 +44,7 @@ class LogReader(Protocol):
     format: str  # how reports name the format
     rules: CaptureRules  # what its frames are judged by
     edition: str  # the edition the reports name
+    addressed: bool  # whether its frames name the systems they are from and to (--src, --dst, --host apply)
     notes: list[str]  # what the logs read so far say as a whole (for the report)
 
     def recognises(self, head: bytes) -> bool:

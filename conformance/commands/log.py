@@ -147,10 +147,18 @@ def _reader(args, logs):
         own.add(found)
     if len(own) > 1:
         raise UsageError("the logs come with different definitions beside them: judge them one at a time")
-    suite = own.pop() or suite
+    beside = own.pop()
+    if args.edition is not None and beside is not None and args.edition not in beside.editions \
+            and args.edition in suite.editions:
+        raise UsageError(f"the definitions beside the log (edition {', '.join(beside.editions)}) have no edition "
+                         f"{args.edition!r}: --suite {suite.name} judges it by the suite's own, which have")
+    suite = beside or suite
     if args.edition is not None:
         chosen_edition(suite, args.edition)
     reader = _log_reader(suite, args.edition)
+    if not reader.addressed and any(v is not None for v in (args.src, args.dst, args.host)):
+        raise UsageError(f"--src, --dst and --host do not apply to a {reader.format}: its messages name no system "
+                         "(--message and --start/--end do)")
     known_groups(suite, args.message, reader.rules.keys)
     return suite, reader, notes, damage
 

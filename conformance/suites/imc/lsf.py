@@ -31,6 +31,7 @@ class LsfReader:
     """Reads LSF logs for the IMC suite ``suite``: frames judged by its capture rules."""
 
     format = "LSF"
+    addressed = True
 
     def __init__(self, suite, edition: str | None):
         self.suite, self.rules = suite, suite.capture_rules()

@@ -71,6 +71,7 @@ class BagReader:
     edition that recorded it, the same for every connection of a type)."""
 
     format = "ROS 1 bag"
+    addressed = False  # a message names no system (ros_acomms' addresses are fields of some types)
 
     def __init__(self, suite, edition: str | None):
         self.suite, self.judged = suite, edition
