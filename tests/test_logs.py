@@ -596,3 +596,12 @@ def test_an_edition_the_xml_beside_the_log_lacks_names_the_suite_that_has_it(log
     assert code == 2 and "have no edition 'imc-5.4.11': --suite imc judges it by the suite's own" in line
     code, out = run(tmp_path / "Data.lsf", "--edition", "imc-5.4.11", "--suite", "imc", capsys=capsys)
     assert code == 0, out.err
+
+
+def test_a_log_with_no_case_ends_its_summary_without_a_dangling_colon(tmp_path, capsys):
+    (tmp_path / "Data.lsf").write_bytes(heartbeats(1.7e9, 3))
+    code, out = run(tmp_path / "Data.lsf", "--message", "LblRange", capsys=capsys)
+    last = out.out.rstrip("\n").splitlines()[-1]
+    assert re.fullmatch(r"0 cases in \d+\.\d\d s", last), last
+    code, out = run(tmp_path / "Data.lsf", "--message", "Heartbeat", capsys=capsys)
+    assert re.fullmatch(r"1 case in \d+\.\d\d s: 1 PASS", out.out.rstrip("\n").splitlines()[-1]), out.out

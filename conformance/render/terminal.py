@@ -87,5 +87,6 @@ def print_result(result: RunResult, console: Console) -> None:
         console.print(f"[dim]{safe(line[:600])}[/]")
     summary = ", ".join(f"{n} {v}" for v, n in result.summary.items())
     explained = sum(1 for c in shown if c.errata)
-    console.print(f"{len(result.cases)} cases in {result.duration:.2f} s: {summary}"
+    n = len(result.cases)
+    console.print(f"{n} case{'s' if n != 1 else ''} in {result.duration:.2f} s" + (f": {summary}" if summary else "")
                   + (f" ({explained} failures are documented errata)" if explained else ""))
