@@ -146,8 +146,7 @@ def command(args) -> int:
         session.close()
         if recorder is not None:
             # a run stopped at its first failure (--exitfirst) recorded only part of the exchange, as an interrupted one
-            stopped = args.exitfirst and result is not None and any(failing(c.verdict, args.strict) for c in result.cases)
-            recorder.close(complete=result is not None and result.complete and not stopped)
+            recorder.close(complete=result is not None and result.complete)
     if args.shard:
         result.shard = args.shard
         result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's {total} "
@@ -167,7 +166,7 @@ def command(args) -> int:
         reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
         problems += write_file(Path(args.write_waivers), json.dumps(waivers_document(failing_ids, reason), indent=1) + "\n",
                                f"waivers file ({len(failing_ids)} waivers)", console)
-    if not result.complete:
+    if not result.complete and not result.stopped:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     return 2 if problems else result.exit_code()

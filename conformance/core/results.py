@@ -149,6 +149,7 @@ class RunResult:
     shard: tuple[int, int] | None = None  # (K, N) of a run of one shard of its selection (--shard K/N)
     provenance: Provenance | None = None  # None: a result of format 1 to 4, or one made without the command line
     causes: list[Cause] | None = None  # the failures grouped by cause (core.causes), made when first asked for
+    stopped: bool = False  # not complete because it stopped at its first failing case (--exitfirst), not interrupted
 
     def cause_groups(self) -> list[Cause]:
         """The failing and NON_STRICT cases grouped by cause, largest first (as the run grouped them, or from what
@@ -172,10 +173,10 @@ class RunResult:
         return list(dict.fromkeys(source_case(c.id) for c in self.cases if c.verdict in ATTENTION))
 
     def exit_code(self) -> int:
-        """130 if interrupted; else 2 for an adapter error or protocol violation, or when nothing was tested
+        """130 if interrupted (not stopped at its first failure); else 2 for an adapter error or protocol violation, or when nothing was tested
         (every case INCONCLUSIVE or UNSUPPORTED; a shard of no case tested all it was given); else 1 for a failing
         verdict, a crash or gone incident or (under --strict) a check kind left untested; else 0."""
-        if not self.complete:
+        if not self.complete and not self.stopped:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
         if Verdict.ADAPTER_ERROR in verdicts or any(i.kind == "protocol" for i in self.incidents):
@@ -210,7 +211,9 @@ class RunResult:
                    doc["started"], doc["duration"], messages, doc["stderr"], doc["notes"], doc.get("complete", True),
                    [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []),
                    (doc["shard"]["index"], doc["shard"]["of"]) if "shard" in doc else None,
-                   Provenance(**doc["provenance"]) if "provenance" in doc else None, causes)
+                   Provenance(**doc["provenance"]) if "provenance" in doc else None, causes,
+                   # not complete, yet not exiting as interrupted: stopped at its first failing case
+                   not doc.get("complete", True) and doc.get("exit_code", INTERRUPTED) != INTERRUPTED)
 
 
 def format_version(doc) -> int:

@@ -149,9 +149,10 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     data = {case.id: case.data for case in cases}
     causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)))
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
-                     round(clock() - began, 3), messages, session.stderr, notes, complete,
+                     round(clock() - began, 3), messages, session.stderr, notes, complete and not stopped_at,
                      list(session.incidents), untested, causes=causes,
-                     provenance=replace(provenance, errata=errata) if provenance is not None else None)
+                     provenance=replace(provenance, errata=errata) if provenance is not None else None,
+                     stopped=complete and bool(stopped_at))
 
 
 def case_verdict(checks: list[CheckResult], waiver: Waiver | None) -> Verdict:

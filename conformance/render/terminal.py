@@ -46,7 +46,8 @@ def safe(text: str | None) -> str:
 def print_result(result: RunResult, console: Console) -> None:
     print_causes(result, console)
     title = f"{result.implementation} — {result.title} corpus, edition {result.edition}"
-    table = Table(title=safe(title + ("" if result.complete else " (INCOMPLETE: interrupted)")))
+    table = Table(title=safe(title + ("" if result.complete else " (INCOMPLETE: stopped at its first failing case)"
+                                      if result.stopped else " (INCOMPLETE: interrupted)")))
     table.add_column("message")
     table.add_column("key", justify="right")
     table.add_column("verdict")
