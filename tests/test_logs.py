@@ -32,6 +32,7 @@ from imc_conformance.capture.logs import Logged
 from imc_conformance.cli import main
 from imc_conformance.suites import load_suite
 from imc_conformance.suites.imc import codec
+from imc_conformance.suites.imc.crc16 import arc
 from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
 from imc_conformance.suites.imc.traffic import write_log
 
@@ -605,3 +606,16 @@ def test_a_log_with_no_case_ends_its_summary_without_a_dangling_colon(tmp_path, 
     assert re.fullmatch(r"0 cases in \d+\.\d\d s", last), last
     code, out = run(tmp_path / "Data.lsf", "--message", "Heartbeat", capsys=capsys)
     assert re.fullmatch(r"1 case in \d+\.\d\d s: 1 PASS", out.out.rstrip("\n").splitlines()[-1]), out.out
+
+
+def test_a_log_of_one_frame_outside_the_suite_says_so_in_the_singular(tmp_path, capsys):
+    frame = codec.encode(SUITE.defs, {"abbrev": "Heartbeat", "fields": {}, "header": {
+        "timestamp": 1.7e9, "src": VEHICLE, "src_ent": 0, "dst": 0xFFFF, "dst_ent": 255}}, "le")
+    other = bytearray(frame)
+    other[2:4] = struct.pack("<H", 2)  # QueryEntityState: empty, as Heartbeat is, and no message of the suite
+    other[-2:] = struct.pack("<H", arc(bytes(other[:-2])))
+    (tmp_path / "Data.lsf").write_bytes(bytes(other))
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    notes = json.loads((tmp_path / "r.json").read_text())["notes"]
+    assert any(n.startswith("1 frame read, 0 judged") for n in notes), notes
+    assert any(n.startswith("1 frame of 1 message the suite does not cover") for n in notes), notes

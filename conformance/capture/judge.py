@@ -288,13 +288,13 @@ class CaptureJudge:
         seconds = self.stretched + self.last - self.begun if self.log else self.last - (self.origin or 0.0)
         span = f", from {_when(self.origin)} for {seconds:.3f} s" if self.origin else ""
         if self.log:
-            out = [f"{self.records:,} frames read, {self.datagrams:,} judged{span}"]
+            out = [f"{_count(self.records, 'frame')} read, {self.datagrams:,} judged{span}"]
         else:
             out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged{span}"]
         if self.outside:
             top = ", ".join(f"{name} ({n:,})" for name, n in self.outside.most_common(8))
-            out.append(f"{sum(self.outside.values()):,} frames of {len(self.outside)} messages the suite does not "
-                       f"cover ({self.rules.outside}): {top}{' ...' if len(self.outside) > 8 else ''}")
+            out.append(f"{_count(sum(self.outside.values()), 'frame')} of {_count(len(self.outside), 'message')} "
+                       f"the suite does not cover ({self.rules.outside}): {top}{' ...' if len(self.outside) > 8 else ''}")
         if not self.tallies and not self.valid:
             out.append("no frame of the suite was judged: none in the selection" if self.log else
                        "no frame of the suite was judged: none on the ports (--port names others) or in the selection")
