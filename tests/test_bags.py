@@ -170,7 +170,7 @@ def test_other_types_are_counted_and_left_alone(tmp_path, capsys):
         ("/packet", connection("ros_acomms_msgs/Packet", "seed"), codec.encode(SUITE.defs.edition("seed"), EXAMPLES[0]))])
     code, doc, _ = judged(bag, capsys)
     assert code == 0 and [m["name"] for m in doc["messages"]] == ["Packet"]
-    assert "2 frames of 1 messages the suite does not cover (counted, left alone): std_msgs/String (2)" in doc["notes"]
+    assert "2 frames of 1 message the suite does not cover (counted, left alone): std_msgs/String (2)" in doc["notes"]
 
 
 def test_megabytes_of_a_connections_text_are_shortened_in_the_report(tmp_path, capsys):
@@ -412,3 +412,16 @@ def test_src_dst_and_host_do_not_apply_to_a_bag(tmp_path, capsys):
         err = out.err
         assert code == 2 and err.count("\n") == 1, err
         assert "--src, --dst and --host do not apply to a ROS 1 bag: its messages name no system" in err
+
+
+def test_a_definition_text_too_large_to_read_is_not_judged(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(bags, "DEFINITION_LIMIT", 4096)
+    full, text, digest = connection("ros_acomms_msgs/Packet", "seed")
+    lines = "".join(f"uint8 f{i}\n" for i in range(1000))
+    bag = write_bag(tmp_path / "lines.bag", [("/packet", (full, text + lines, digest), b"\x00" * 8)])
+    code, doc, _ = judged(bag, capsys)
+    definition = "ros_acomms/Packet/capture/connection/definition"
+    assert doc["verdicts"][definition] == "INCONCLUSIVE" and code == 2  # nothing was judged
+    assert f"its definition text holds {len(text + lines):,} characters, more than the 4 kB read" in \
+        doc["details"][definition][1]
+    assert doc["verdicts"]["ros_acomms/Packet/capture/frame/unknown-definition"] == "INCONCLUSIVE"

@@ -40,6 +40,7 @@ MD5_CLAUSE = "ros-acomms#ros-1-md5-checksums"
 UNKNOWN = "unknown-definition"  # messages of a connection whose definition no edition has: not judged
 TOO_LARGE = "too-large-to-decode"  # a message beyond MESSAGE_LIMIT: not judged
 MESSAGE_LIMIT = 4 << 20  # bytes of a message decoded whole (ros_acomms' are of a few kB)
+DEFINITION_LIMIT = 1 << 20  # characters of a connection's definition text read (ros_acomms_msgs': a few kB each)
 LISTED = 3  # differences named per edition
 NAMED = 120  # characters of a topic or a type's name a report shows (the bag's text: it may be megabytes)
 
@@ -241,6 +242,10 @@ class _Bag:
 
         def finding(case: str, verdict: Verdict, detail: str = "", cited: str = clause) -> Finding:
             return Finding(group, f"connection/{case}", verdict, cited, detail, where=f"topic {topic}", label=label)
+        if len(definition) > DEFINITION_LIMIT:  # read, its lines would take fifty times its size
+            why = f"its definition text holds {len(definition):,} characters, more than the {DEFINITION_LIMIT >> 10} kB read"
+            self._recorded("no edition (a definition too large to read)", topic)
+            return [finding("definition", Verdict.INCONCLUSIVE, why)], None, f"{why}: not judged"
         try:
             parsed = parse_full_text(definition, full)
             own = text_md5(parsed, full)
