@@ -44,8 +44,18 @@ class Stream:
         self.damage: list[str] = []
         self.ended = False  # no byte more is read (the end, the bound, or an error)
         self.failed = False  # the reading stopped short of the end (an error, or the bound), said in ``damage``
+        self.broken = False  # the pieces stop at damage (said in ``damage``), not at the end of the log
+        self.gaps = False  # the reader takes GAP among the pieces (LogReader.gaps): a gzip member cut where another
+        # begins is then read on from there
 
     def pieces(self) -> Iterator[bytes]:
+        """The decompressed bytes; where ``gaps``, GAP between two pieces that do not follow each other (a gzip
+        member cut, and the next one read on) and after the last where the pieces stop at damage."""
+        yield from self._pieces()
+        if (self.broken or self.failed) and self.gaps and self.produced:
+            yield GAP
+
+    def _pieces(self) -> Iterator[bytes]:
         first = self._raw(PIECE)
         if first.startswith(GZIP):
             self.compression = "gzip"
@@ -97,6 +107,7 @@ class Stream:
                     pending, pos = self._raw(PIECE), 0
                     if not pending:
                         yield from held
+                        self.broken = True
                         if not self.failed:  # else it said where the reading stopped
                             self.damage.append(f"{self.path}: the {what} stream that begins at byte {start:,} is "
                                                f"cut short at byte {self.read:,}, the end of the file (no end marker):"
@@ -107,10 +118,18 @@ class Stream:
                     cut, pending = self._cut_at(decoder, pending, pos)
                     if cut:
                         yield from held
+                        at = self.read - len(pending) + pos
                         self.damage.append(f"{self.path}: the gzip member that begins at byte {start:,} is cut at "
-                                           f"byte {self.read - len(pending) + pos:,}, where another member begins: "
-                                           "every frame before the cut judged, nothing after it read")
-                        return
+                                           f"byte {at:,}, where another member begins: every frame before the cut "
+                                           + ("judged, and the log read on from there (the frame the cut splits is "
+                                              "not)" if self.gaps else "judged, nothing after it read"))
+                        if not self.gaps:
+                            self.broken = True
+                            return
+                        if self.produced:
+                            yield GAP
+                        decoder, start, held, holding = fresh(), at, [], True
+                        continue
                     cut = self._member_begins(pending, pos + 1, size - 1, start)
                 size_now = size if cut < 0 else cut - pos
                 feed, pos = pending[pos:pos + size_now], pos + size_now
@@ -134,6 +153,7 @@ class Stream:
                 self.damage.append(f"{self.path}: damaged {what} data {at}, in the {'member' if gz else 'stream'} "
                                    f"that begins at byte {start:,} ({'zlib' if gz else 'libbz2'}: {exc}): {said}, "
                                    "nothing after it read")
+                self.broken = True
                 return
             if out:
                 self.produced += len(out)
@@ -143,6 +163,7 @@ class Stream:
                     self.damage.append(f"{self.path}: {self.produced >> 20} MB out of its first {consumed:,} "
                                        f"compressed bytes, more than {BOMB_RATIO} times their size (no log compresses "
                                        "so well: a decompression bomb?): refused from there")
+                    self.broken = True
                     return
                 if holding:
                     held.append(out)
@@ -236,6 +257,16 @@ def _salvage(saved, feed: bytes, here: int) -> tuple[bytes, int]:
         except zlib.error:
             return b"".join(out), here + i
     return b"".join(out), here + len(feed)
+
+
+class _Gap:
+    """Between two decompressed pieces that do not follow each other (``Stream.gaps``)."""
+
+    def __repr__(self) -> str:
+        return "GAP"
+
+
+GAP = _Gap()
 
 
 class Short(ValueError):

@@ -203,6 +203,7 @@ def _judge(judge, reader, log: _Log, damage: list[str], named: bool) -> None:
     except ValueError as exc:  # gone or changed since its format was recognised
         damage.append(str(exc))
         return
+    stream.gaps = reader.gaps
     source, path = f"{log.path.name} " if named else "", log.path
     logged, found = judge.logged, judge.found
     try:

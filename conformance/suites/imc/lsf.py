@@ -17,6 +17,7 @@ from itertools import chain
 from pathlib import Path
 
 from ...capture.logs import Logged
+from ...capture.streams import GAP
 from . import codec
 from .crc16 import arc
 
@@ -32,6 +33,7 @@ class LsfReader:
 
     format = "LSF"
     addressed = True
+    gaps = True
 
     def __init__(self, suite, edition: str | None):
         self.suite, self.rules = suite, suite.capture_rules()
@@ -52,10 +54,10 @@ class LsfReader:
         buf, pos, base, number = b"", 0, 0, 0  # base: the log's byte at buf[0]
         skipped, ids = _Skipped(), self.ids
         for piece in chain(pieces, (b"",)):  # then b"": the end of the log
+            if piece is GAP:  # what follows does not follow (damage the stream said): the frame it cuts is dropped
+                buf, base, pos = b"", base + len(buf), 0
+                continue
             last = not piece
-            if last and damage:  # the stream stopped at damage it said: the bytes left are no end of the log
-                pos = len(buf)
-                break
             buf, base, pos = buf[pos:] + piece, base + pos, 0
             n = len(buf)
             while pos < n:

@@ -73,6 +73,7 @@ class BagReader:
 
     format = "ROS 1 bag"
     addressed = False  # a message names no system (ros_acomms' addresses are fields of some types)
+    gaps = False  # a bag is read up to damage in its stream, never on after it
 
     def __init__(self, suite, edition: str | None):
         self.suite, self.judged = suite, edition
