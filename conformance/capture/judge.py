@@ -82,7 +82,6 @@ class CaptureJudge:
         self.log = log  # the frames come from logs (``logged``), not from datagrams
         self.jumps = 0  # times a log's clock jumped (the splits of the log into stretches)
         self.across = 0  # exchanges open across a split
-        self.begun = self.stretched = 0.0  # when the log's current stretch began; seconds of the stretches before
 
     def losses(self, start: float, end: float, count: int) -> None:
         """``count`` datagrams were lost between ``start`` and ``end`` (a live watcher's receive buffer)."""
@@ -121,7 +120,7 @@ class CaptureJudge:
         a later-stamped one (DUNE stamps a message when its task dispatches it, not when it is logged)."""
         t, last = got.time, self.last
         if self.origin is None:
-            t = got.time = self.origin = self.last = self.begun = t if -MAX_TIME < t < MAX_TIME else 0.0
+            t = got.time = self.origin = self.last = t if -MAX_TIME < t < MAX_TIME else 0.0
         elif not -MAX_TIME < t < MAX_TIME:  # no time (not a number, or beyond any date): timed by the clock
             self._split(last)
             got.time = last
@@ -145,8 +144,7 @@ class CaptureJudge:
                 self._tally(finding)
         self.jumps += 1
         self.across += count
-        self.stretched += self.last - self.begun
-        self.last = self.begun = t
+        self.last = t
 
     def found(self, f: Finding, source: str = "") -> None:
         """Tally what a log says of its frames (a bag connection's definition), as it is found."""
@@ -285,8 +283,8 @@ class CaptureJudge:
         return sorted(by_group.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0]))
 
     def notes(self) -> list[str]:
-        seconds = self.stretched + self.last - self.begun if self.log else self.last - (self.origin or 0.0)
-        span = f", from {_when(self.origin)} for {seconds:.3f} s" if self.origin else ""
+        span = f", from {_when(self.origin)}" + ("" if self.jumps else f" for {self.last - self.origin:.3f} s") \
+            if self.origin else ""  # a log split by its clock's jumps spans no one stretch of time
         if self.log:
             out = [f"{_count(self.records, 'frame')} read, {self.datagrams:,} judged{span}"]
         else:
