@@ -97,7 +97,7 @@ class Stream:
         what, gz = self.compression, self.compression == "gzip"
         decoder, start, pos, size = fresh(), 0, 0, SLICE[what]  # start: the file's byte where the stream began
         held: list[bytes] = []  # the current gzip member's output, not yet checked
-        holding = gz
+        holding, kept = gz, 0  # kept: the bytes held
         while True:
             tail = decoder.unconsumed_tail if gz else b""
             if tail or (not gz and not decoder.needs_input):
@@ -128,20 +128,19 @@ class Stream:
                             return
                         if self.produced:
                             yield GAP
-                        decoder, start, held, holding = fresh(), at, [], True
+                        decoder, start, held, holding, kept = fresh(), at, [], True, 0
                         continue
                     cut = self._member_begins(pending, pos + 1, size - 1, start)
                 size_now = size if cut < 0 else cut - pos
                 feed, pos = pending[pos:pos + size_now], pos + size_now
             given = self.read - len(pending) + min(pos, len(pending))  # the file's byte after what was given
             here = given - len(feed)  # the file's byte of feed[0]
-            saved = decoder.copy() if gz and not holding else None
+            saved = decoder.copy() if gz else None  # to find the damage again, a byte at a time
             try:
                 out = decoder.decompress(feed, PIECE)
             except (zlib.error, OSError, EOFError, ValueError) as exc:
                 out, where = _salvage(saved, feed, here) if saved is not None else (b"", None)
-                at = f"at byte {where:,}" if where is not None else \
-                    f"at byte {given:,}" if gz else f"between bytes {here:,} and {given:,}"
+                at = f"at byte {where:,}" if where is not None else f"between bytes {here:,} and {given:,}"
                 if holding:
                     said = "what the member decompressed to is not judged (gzip checks a member whole, at its end, " \
                            "and damaged data decompresses on into garbage), every frame before the member judged"
@@ -167,14 +166,15 @@ class Stream:
                     return
                 if holding:
                     held.append(out)
-                    if len(held) * PIECE > HOLD and sum(map(len, held)) > HOLD:  # a member too large to hold
+                    kept += len(out)
+                    if kept > HOLD:  # a member too large to hold: judged as it comes
                         yield from held
                         held, holding = [], False
                 else:
                     yield out
             if decoder.eof:
                 yield from held
-                held, holding = [], gz
+                held, holding, kept = [], gz, 0
                 rest = decoder.unused_data + pending[pos:]
                 pending, pos = rest + self._raw(max(0, len(magic) - len(rest))), 0
                 if not pending:
