@@ -621,3 +621,16 @@ def test_a_log_of_one_frame_outside_the_suite_says_so_in_the_singular(tmp_path, 
     notes = json.loads((tmp_path / "r.json").read_text())["notes"]
     assert any(n.startswith("1 frame read, 0 judged") for n in notes), notes
     assert any(n.startswith("1 frame of 1 message the suite does not cover") for n in notes), notes
+
+
+def test_a_request_stamped_in_the_past_is_not_timed_from_its_stamp(log, tmp_path, capsys):
+    """A query stamped 9 s behind the log's clock (a message kept with its first time), answered 0.2 s later by the
+    log's clock: its stamp says nothing of when it was sent, so the exchange is INCONCLUSIVE, never a FAIL."""
+    end = last_time(log)
+    tail = heartbeats(end + 1, 3) + query(end + 3 - 9) + heartbeats(end + 3.1, 1) + reply(end + 3.2) \
+        + heartbeats(end + 4, 5)
+    (tmp_path / "Data.lsf").write_bytes(log + tail)
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 0 and doc["verdicts"][QUERY_ANSWERED] == "INCONCLUSIVE"
+    assert any("jumped 2 times" in n for n in doc["notes"]), doc["notes"]

@@ -82,6 +82,7 @@ class CaptureJudge:
         self.log = log  # the frames come from logs (``logged``), not from datagrams
         self.jumps = 0  # times a log's clock jumped (the splits of the log into stretches)
         self.across = 0  # exchanges open across a split
+        self.high = float("-inf")  # the log's clock before its last jump back, at the latest
 
     def losses(self, start: float, end: float, count: int) -> None:
         """``count`` datagrams were lost between ``start`` and ``end`` (a live watcher's receive buffer)."""
@@ -116,15 +117,17 @@ class CaptureJudge:
         reception: every frame is timed by its own timestamp, the log's clock being the latest of them. A frame
         stamped more than CLOCK_JUMP seconds ahead of the clock, or more than CLOCK_BACK behind it (a gap in the log,
         its clock set, another system's clock), or with no time, splits the log into stretches timed apart: every
-        exchange open across a split is INCONCLUSIVE (``_split``). Within CLOCK_BACK behind, a frame was logged after
-        a later-stamped one (DUNE stamps a message when its task dispatches it, not when it is logged)."""
+        exchange open across a split is INCONCLUSIVE (``_split``). So does a frame that brings the clock back to where
+        it was before it jumped back (a frame stamped in the past, then the log's time again: the request it held was
+        not sent when it says). Within CLOCK_BACK behind, a frame was logged after a later-stamped one (DUNE stamps a
+        message when its task dispatches it, not when it is logged)."""
         t, last = got.time, self.last
         if self.origin is None:
             t = got.time = self.origin = self.last = t if -MAX_TIME < t < MAX_TIME else 0.0
         elif not -MAX_TIME < t < MAX_TIME:  # no time (not a number, or beyond any date): timed by the clock
             self._split(last)
             got.time = last
-        elif t > last + CLOCK_JUMP or t < last - CLOCK_BACK:
+        elif t > last + CLOCK_JUMP or t < last - CLOCK_BACK or last < self.high - CLOCK_BACK <= t:
             self._split(t)
         elif t > last:
             self.last = t
@@ -144,6 +147,7 @@ class CaptureJudge:
                 self._tally(finding)
         self.jumps += 1
         self.across += count
+        self.high = max(self.high, self.last)
         self.last = t
 
     def found(self, f: Finding, source: str = "") -> None:
@@ -309,9 +313,10 @@ class CaptureJudge:
                        "(duplicated by the network) were judged once by the exchange rules")
         if self.jumps:
             out.append(f"the log's clock jumped {_count(self.jumps, 'time')} (ahead by more than {CLOCK_JUMP:g} s, back "
-                       f"by more than {CLOCK_BACK:g} s, or a frame with no time: a gap in the log, its clock set, "
-                       f"another system's clock), splitting it into {self.jumps + 1:,} stretches timed apart: "
-                       f"{_count(self.across, 'exchange')} open across a split INCONCLUSIVE")
+                       f"by more than {CLOCK_BACK:g} s and again to where it was, or a frame with no time: a gap in the "
+                       "log, its clock set, another system's clock, a message kept with its first time), splitting it "
+                       f"into {self.jumps + 1:,} stretches timed apart: {_count(self.across, 'exchange')} open across "
+                       "a split INCONCLUSIVE")
         if self.dissector.held or self.dissector.given_up:
             out.append(f"{len(self.dissector.held) + self.dissector.given_up:,} IP datagrams never reassembled "
                        "(fragments missing from the capture)")
