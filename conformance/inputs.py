@@ -12,6 +12,7 @@ import json
 import shlex
 from pathlib import Path
 
+from .escaping import printable
 from .limits import FILE_LIMIT, JSON_NESTING_LIMIT
 
 
@@ -47,10 +48,19 @@ def nesting_problem(value, limit: int = JSON_NESTING_LIMIT) -> str | None:
     return None
 
 
-def parse_json(raw: bytes | str, where: str):
-    """The JSON value of ``raw``; ValueError naming ``where`` if it is not JSON or nests too deeply."""
+def parse_json(raw: bytes | str, where: str, unique: bool = False):
+    """The JSON value of ``raw``; ValueError naming ``where`` if it is not JSON or nests too deeply, or (``unique``)
+    if an object gives a key twice (JSON leaves which one counts unsaid: a file that says what to do must not)."""
+
+    def once(pairs: list) -> dict:
+        out = {}
+        for key, value in pairs:
+            if key in out:
+                raise ValueError(f"{where}: the key '{printable(key[:40])}' is given twice in one object")
+            out[key] = value
+        return out
     try:
-        value = json.loads(raw)
+        value = json.loads(raw, object_pairs_hook=once if unique else None)
     except json.JSONDecodeError as exc:
         raise ValueError(f"{where}: not JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
     except RecursionError:
@@ -63,10 +73,10 @@ def parse_json(raw: bytes | str, where: str):
     return value
 
 
-def read_json(path: Path, limit: int = FILE_LIMIT) -> tuple[bytes, object]:
-    """The bytes of a JSON file and its value; ValueError with the reason."""
+def read_json(path: Path, limit: int = FILE_LIMIT, unique: bool = False) -> tuple[bytes, object]:
+    """The bytes of a JSON file and its value; ValueError with the reason (``unique``: see ``parse_json``)."""
     raw = read_bytes(path, limit)
-    return raw, parse_json(raw, str(path))
+    return raw, parse_json(raw, str(path), unique)
 
 
 def command_argv(text: str, option: str, missing: str) -> list[str]:

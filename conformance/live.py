@@ -45,7 +45,7 @@ def options(args, suite, everything) -> dict:
     if args.claims:
         from .inputs import read_json
         try:
-            _, doc = read_json(Path(args.claims))
+            _, doc = read_json(Path(args.claims), unique=True)
         except ValueError as exc:
             raise ValueError(f"--claims: {exc}") from None
         try:

@@ -22,6 +22,7 @@ from imc_conformance.capture.logs import Logged
 from imc_conformance.cli import main
 from imc_conformance.paths import VECTORS
 from imc_conformance.suites import load_suite
+from imc_conformance.capture import streams
 from imc_conformance.suites.ros_acomms import bags, codec
 from imc_conformance.suites.ros_acomms.msgtext import full_text, md5, parse_full_text, text_md5
 
@@ -169,7 +170,7 @@ def test_other_types_are_counted_and_left_alone(tmp_path, capsys):
         ("/packet", connection("ros_acomms_msgs/Packet", "seed"), codec.encode(SUITE.defs.edition("seed"), EXAMPLES[0]))])
     code, doc, _ = judged(bag, capsys)
     assert code == 0 and [m["name"] for m in doc["messages"]] == ["Packet"]
-    assert "2 frames of 1 messages the suite does not cover (counted, left alone): std_msgs/String (2)" in doc["notes"]
+    assert "2 frames of 1 message the suite does not cover (counted, left alone): std_msgs/String (2)" in doc["notes"]
 
 
 def test_megabytes_of_a_connections_text_are_shortened_in_the_report(tmp_path, capsys):
@@ -328,3 +329,99 @@ def test_a_damaged_bag_is_read_or_refused_never_a_crash(small_bags, which, edits
             judge.logged(unit)
     judge.result(implementation="fuzz", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False, title="ros")
     assert all("\n" not in line for line in damage)
+
+
+# ---------------------------------------------------------------- bombs and bounds, in bags written by hand
+
+def record(fields: dict[str, bytes], data: bytes) -> bytes:
+    """A bag record: its header's ``name=value`` fields, each after its length, then its data."""
+    head = b"".join(struct.pack("<I", len(k) + 1 + len(v)) + k.encode() + b"=" + v for k, v in fields.items())
+    return struct.pack("<I", len(head)) + head + struct.pack("<I", len(data)) + data
+
+
+def conn_record(conn: int, full: str, definition: str, digest: str) -> bytes:
+    described = {"type": full.encode(), "md5sum": digest.encode(), "message_definition": definition.encode()}
+    return record({"op": b"\x07", "conn": struct.pack("<I", conn), "topic": b"/t"},
+                  b"".join(struct.pack("<I", len(k) + 1 + len(v)) + k.encode() + b"=" + v for k, v in described.items()))
+
+
+def message_record(conn: int, data: bytes, t: int = 1_700_000_000) -> bytes:
+    return record({"op": b"\x02", "conn": struct.pack("<I", conn), "time": struct.pack("<II", t, 0)}, data)
+
+
+def chunk_record(content: bytes, compression: str = "bz2") -> bytes:
+    import bz2
+
+    data = bz2.compress(content, 9) if compression == "bz2" else content
+    return record({"op": b"\x05", "compression": compression.encode(), "size": struct.pack("<I", len(content))}, data)
+
+
+def test_a_bag_bomb_of_many_chunks_is_refused_at_the_floor(tmp_path, monkeypatch):
+    """Chunks of repeated messages, 256 kB each from a few hundred bytes: the chunks' output is taken against the
+    bag's bytes read, as a compressed stream's, and refused once past the floor (lowered here to 1 MB)."""
+    monkeypatch.setattr(streams, "BOMB_FLOOR", 1 << 20)
+    message = message_record(0, bytes(1000))
+    content = conn_record(0, *STRING) + message * ((256 << 10) // len(message))
+    chunk = chunk_record(content)
+    (tmp_path / "bomb.bag").write_bytes(bags.MAGIC + chunk * 100)
+    assert (tmp_path / "bomb.bag").stat().st_size < 100 * 500
+    ours, damage, _ = read(tmp_path / "bomb.bag")
+    assert len(damage) == 1 and "more than 200 times their size (no bag compresses so well: a decompression bomb?): " \
+                                "refused from there" in damage[0]
+    per_chunk = content.count(message)
+    assert len(ours) <= 5 * per_chunk  # the floor's worth of chunks, not the hundred
+
+
+def test_a_definition_inside_a_chunk_is_bounded_as_outside(tmp_path, monkeypatch):
+    monkeypatch.setattr(bags, "HEADER_LIMIT", 1 << 20)
+    full, text, digest = connection("ros_acomms_msgs/Packet", "seed")
+    huge = text + "# " + "x" * (3 << 19) + "\n"  # 1.5 MB of comment
+    (tmp_path / "def.bag").write_bytes(bags.MAGIC + chunk_record(conn_record(0, full, huge, digest), "none"))
+    _, damage, _ = read(tmp_path / "def.bag")
+    assert len(damage) == 1 and damage[0].startswith("def.bag: the connection record in the chunk at byte 13 (byte 0 "
+                                                     "of its data) holds 1,573,")
+    assert damage[0].endswith(" bytes, more than the 1 MB read at once: the bag is read up to it")
+
+
+def test_a_message_too_large_to_decode_whole_is_not_judged(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(bags, "MESSAGE_LIMIT", 1000)
+    bag = write_bag(tmp_path / "large.bag", [("/packet", connection("ros_acomms_msgs/Packet", "seed"), bytes(1001))])
+    code, doc, _ = judged(bag, capsys)
+    case = "ros_acomms/Packet/capture/frame/too-large-to-decode"
+    assert code == 0 and doc["verdicts"][case] == "INCONCLUSIVE"
+    assert "1,001 bytes, more than the 0 MB a message is decoded whole up to: not judged" in doc["details"][case][1]
+
+
+def test_a_damaged_bz2_chunk_is_described_as_libbz2_says(tmp_path):
+    import bz2
+
+    content = conn_record(0, *STRING) + b"".join(message_record(0, bytes([i]) * 300) for i in range(200))
+    data = bytearray(bz2.compress(content))
+    data[len(data) // 2] ^= 0xFF
+    chunk = record({"op": b"\x05", "compression": b"bz2", "size": struct.pack("<I", 100)}, bytes(data))
+    (tmp_path / "bad.bag").write_bytes(bags.MAGIC + chunk)
+    _, damage, _ = read(tmp_path / "bad.bag")
+    assert damage == ["bad.bag: the chunk at byte 13 is damaged bz2 data (Invalid data stream): the bag is read up to "
+                      "it"]
+
+
+def test_src_dst_and_host_do_not_apply_to_a_bag(tmp_path, capsys):
+    bag = edition_bag(tmp_path / "b.bag", "seed")
+    for option in ("--src", "--dst", "--host"):
+        code, out = run(bag, option, "30", capsys=capsys)
+        err = out.err
+        assert code == 2 and err.count("\n") == 1, err
+        assert "--src, --dst and --host do not apply to a ROS 1 bag: its messages name no system" in err
+
+
+def test_a_definition_text_too_large_to_read_is_not_judged(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(bags, "DEFINITION_LIMIT", 4096)
+    full, text, digest = connection("ros_acomms_msgs/Packet", "seed")
+    lines = "".join(f"uint8 f{i}\n" for i in range(1000))
+    bag = write_bag(tmp_path / "lines.bag", [("/packet", (full, text + lines, digest), b"\x00" * 8)])
+    code, doc, _ = judged(bag, capsys)
+    definition = "ros_acomms/Packet/capture/connection/definition"
+    assert doc["verdicts"][definition] == "INCONCLUSIVE" and code == 2  # nothing was judged
+    assert f"its definition text holds {len(text + lines):,} characters, more than the 4 kB read" in \
+        doc["details"][definition][1]
+    assert doc["verdicts"]["ros_acomms/Packet/capture/frame/unknown-definition"] == "INCONCLUSIVE"

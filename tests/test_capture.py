@@ -169,7 +169,7 @@ def test_other_traffic_is_counted_apart():
                 (3, udp(HEARTBEAT, dst=("10.0.0.30", 9999), src=("10.0.0.1", 9998))),
                 (4, Ether(type=0x0806).build() + bytes(28))])
     result = judge(buf)
-    assert result.notes[1].startswith("1 frames of 1 messages the suite does not cover (framing checked only): id 350 (1)")
+    assert result.notes[1].startswith("1 frame of 1 message the suite does not cover (framing checked only): id 350 (1)")
     assert "1 not judged: datagrams on the ports that are not frames of the suite" in result.notes
     assert "1 not judged: UDP on other ports" in result.notes
     assert "1 not judged: not IP" in result.notes

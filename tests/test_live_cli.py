@@ -91,10 +91,13 @@ def test_claims_files_are_checked(tmp_path, capsys):
     bad = tmp_path / "claims.json"
     for text, says in (("{", "not JSON"), ('{"services": ["telepathy"]}', "unknown service 'telepathy'"),
                        ('["acoustic"]', 'expected {"services"'), ('{"services": [["acoustic"]]}', 'expected {"services"'),
-                       ('{"capabilities": {"acoustic-request": "mostly"}}', "is not one of any, self, none")):
+                       ('{"capabilities": {"acoustic-request": "mostly"}}', "is not one of any, self, none"),
+                       ('{"capabilities": {"acoustic-request": "self", "acoustic-request": "any"}}',
+                        "the key 'acoustic-request' is given twice in one object")):
         bad.write_text(text)
         assert main(["run", "--target", "udp://127.0.0.1:6002", "--claims", str(bad)]) == 2
-        assert says in capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert says in err and err.count("\n") == 1, err
 
 
 def test_serve_refuses_an_unknown_capability_in_one_line(capsys):

@@ -442,3 +442,13 @@ def test_the_terminal_interprets_no_emoji_code_and_no_markup(tricky_result):
 def test_markdown_leaves_no_emoji_code_for_github_to_render(tricky_result):
     text = render_markdown(tricky_result)
     assert ":skull:" not in text and ":white" not in text and "&#58;skull&#58;" in text
+
+
+def test_a_hostile_case_id_is_escaped_in_every_attribute_of_the_html(broken_result):
+    doc = broken_result.to_dict()
+    case = next(c for m in doc["messages"] for c in m["cases"] if c["id"] == FAILING_CASE)
+    case["id"] = FAILING_CASE + "/evil\u202eTEXT\u2066"
+    doc.pop("causes", None)
+    text = render_html(RunResult.from_dict(doc))
+    assert "\u202e" not in text and "\u2066" not in text
+    assert f'data-case="{FAILING_CASE}/evil\\u202eTEXT\\u2066"' in text

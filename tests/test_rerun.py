@@ -11,6 +11,8 @@ import pytest
 from imc_conformance import live
 from imc_conformance.cli import main
 from imc_conformance.core.cases import source_case
+from imc_conformance.core.results import RunResult
+from imc_conformance.render.markdown import render_markdown
 from imc_conformance.core.verdicts import ATTENTION, FAILING
 from live_harness import PARAMS, virtual_session
 
@@ -104,3 +106,8 @@ def test_exitfirst_stops_a_byte_run_at_the_first_failing_case(tmp_path, capsys):
     verdicts = list(saved(path).values())
     assert verdicts[-1] in {f.value for f in FAILING} and len(verdicts) < 40
     assert all(v not in {f.value for f in FAILING} for v in verdicts[:-1])
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    assert doc["complete"] is False and doc["exit_code"] == 1  # only part of the selection, and no interruption
+    back = RunResult.from_dict(doc)
+    assert back.stopped and back.exit_code() == 1
+    assert "Incomplete run**: it stopped at its first failing case" in render_markdown(back)

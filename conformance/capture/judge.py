@@ -19,8 +19,8 @@ from .records import Record
 
 FRAME_CLAUSE = "the byte rules of the suite's corpus (rules.json)"
 RECENT = 256  # watched frames remembered to recognise a datagram the network duplicated
-CLOCK_JUMP = 10.0  # seconds a log's clock may jump ahead before the exchanges open across the jump go unjudged
-CLOCK_CONFIRM = 100  # frames in a row that move a log's clock ahead by more (a running clock, not a burst)
+CLOCK_JUMP = 10.0  # seconds a log's clock may jump ahead before it splits the log (exchanges across go unjudged)
+CLOCK_BACK = 1.0  # seconds a frame may be stamped behind the log's clock (logged out of order: DUNE's, up to 0.15 s)
 MAX_TIME = 1e11  # seconds since the epoch: a logged frame's timestamp beyond (or not a number) is no time
 
 
@@ -80,9 +80,9 @@ class CaptureJudge:
         self.plain = not self.filtered and not self.groups  # nothing narrows the frames judged
         self.lost = 0  # datagrams the watcher lost before it could read them (the kernel dropped them)
         self.log = log  # the frames come from logs (``logged``), not from datagrams
-        self.jumps = 0  # times a log's clock jumped ahead by more than CLOCK_JUMP
-        self.strays = 0  # logged frames stamped too far from the log's clock to move it, timed by it
-        self.ahead: list | None = None  # frames in a row ahead of the clock: [first time, latest time, how many]
+        self.jumps = 0  # times a log's clock jumped (the splits of the log into stretches)
+        self.across = 0  # exchanges open across a split
+        self.high = float("-inf")  # the log's clock before its last jump back, at the latest
 
     def losses(self, start: float, end: float, count: int) -> None:
         """``count`` datagrams were lost between ``start`` and ``end`` (a live watcher's receive buffer)."""
@@ -114,33 +114,23 @@ class CaptureJudge:
 
     def logged(self, got: Logged, source: str = "") -> None:
         """Judge one frame of a log (``source`` names its file when there are several). A log records no time of
-        reception: its frames are timed by their own timestamps on the log's clock, which never goes back. A frame
-        stamped more than CLOCK_JUMP seconds from it (another system's clock, a frame with no time, a burst of
-        frames stamped alike) is timed by the clock. Only a running clock moves it ahead by more: CLOCK_CONFIRM
-        frames in a row, each within CLOCK_JUMP of the one before, over a second at least (a gap in the log, or its
-        clock set); an exchange open across such a jump is not judged on its bound (INCONCLUSIVE)."""
+        reception: every frame is timed by its own timestamp, the log's clock being the latest of them. A frame
+        stamped more than CLOCK_JUMP seconds ahead of the clock, or more than CLOCK_BACK behind it (a gap in the log,
+        its clock set, another system's clock), or with no time, splits the log into stretches timed apart: every
+        exchange open across a split is INCONCLUSIVE (``_split``). So does a frame that brings the clock back to where
+        it was before it jumped back (a frame stamped in the past, then the log's time again: the request it held was
+        not sent when it says). Within CLOCK_BACK behind, a frame was logged after a later-stamped one (DUNE stamps a
+        message when its task dispatches it, not when it is logged)."""
         t, last = got.time, self.last
         if self.origin is None:
             t = got.time = self.origin = self.last = t if -MAX_TIME < t < MAX_TIME else 0.0
-        elif not last - CLOCK_JUMP < t < last + CLOCK_JUMP:
-            ahead = self.ahead
-            if not last + CLOCK_JUMP <= t < MAX_TIME:
-                pass  # behind the clock, or no time
-            elif ahead is None or not -CLOCK_JUMP < t - ahead[1] < CLOCK_JUMP:
-                self.ahead = [t, t, 1]  # from, latest, frames: a clock ahead, perhaps
-            else:
-                ahead[1], ahead[2] = t, ahead[2] + 1
-                if ahead[2] >= CLOCK_CONFIRM and ahead[1] - ahead[0] >= 1.0:
-                    self.jumps += 1
-                    self.tracker.lost(last, t, "the log's clock jumped meanwhile")
-                    self.last, self.ahead, last = t, None, t
-            if t != last:
-                self.strays += 1
-                t = got.time = last
-        else:
-            self.ahead = None
-            if t > last:
-                self.last = t
+        elif not -MAX_TIME < t < MAX_TIME:  # no time (not a number, or beyond any date): timed by the clock
+            self._split(last)
+            got.time = last
+        elif t > last + CLOCK_JUMP or t < last - CLOCK_BACK or last < self.high - CLOCK_BACK <= t:
+            self._split(t)
+        elif t > last:
+            self.last = t
         self.records += 1
         if source is not self.source or not self.sources:
             self._from(source)
@@ -148,6 +138,17 @@ class CaptureJudge:
             self.skipped["outside the selection"] += 1
             return
         self._judge_unit(got, False, got.channel)
+
+    def _split(self, t: float) -> None:
+        """The log's clock jumped to ``t``: a new stretch begins there, and the exchanges open are closed."""
+        findings, count = self.tracker.split("the log's clock jumped meanwhile")
+        for finding in findings:
+            if not self.groups or finding.group in self.groups:
+                self._tally(finding)
+        self.jumps += 1
+        self.across += count
+        self.high = max(self.high, self.last)
+        self.last = t
 
     def found(self, f: Finding, source: str = "") -> None:
         """Tally what a log says of its frames (a bag connection's definition), as it is found."""
@@ -286,15 +287,16 @@ class CaptureJudge:
         return sorted(by_group.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0]))
 
     def notes(self) -> list[str]:
-        span = f", from {_when(self.origin)} for {self.last - self.origin:.3f} s" if self.origin else ""
+        span = f", from {_when(self.origin)}" + ("" if self.jumps else f" for {self.last - self.origin:.3f} s") \
+            if self.origin else ""  # a log split by its clock's jumps spans no one stretch of time
         if self.log:
-            out = [f"{self.records:,} frames read, {self.datagrams:,} judged{span}"]
+            out = [f"{_count(self.records, 'frame')} read, {self.datagrams:,} judged{span}"]
         else:
             out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged{span}"]
         if self.outside:
             top = ", ".join(f"{name} ({n:,})" for name, n in self.outside.most_common(8))
-            out.append(f"{sum(self.outside.values()):,} frames of {len(self.outside)} messages the suite does not "
-                       f"cover ({self.rules.outside}): {top}{' ...' if len(self.outside) > 8 else ''}")
+            out.append(f"{_count(sum(self.outside.values()), 'frame')} of {_count(len(self.outside), 'message')} "
+                       f"the suite does not cover ({self.rules.outside}): {top}{' ...' if len(self.outside) > 8 else ''}")
         if not self.tallies and not self.valid:
             out.append("no frame of the suite was judged: none in the selection" if self.log else
                        "no frame of the suite was judged: none on the ports (--port names others) or in the selection")
@@ -309,12 +311,12 @@ class CaptureJudge:
             out.append(f"{self.duplicates:,} frames identical to one shortly before were judged once by the exchange "
                        "rules" if self.log else f"{self.duplicates:,} datagrams identical to one shortly before "
                        "(duplicated by the network) were judged once by the exchange rules")
-        if self.strays:
-            out.append(f"{self.strays:,} frames stamped more than {CLOCK_JUMP:g} s from the log's clock (another "
-                       "system's clock, or no time) were timed by the log's")
         if self.jumps:
-            out.append(f"the log's clock jumped ahead {self.jumps:,} times by more than {CLOCK_JUMP:g} s (a gap in the "
-                       "log, or its clock set): an exchange open across a jump is INCONCLUSIVE")
+            out.append(f"the log's clock jumped {_count(self.jumps, 'time')} (ahead by more than {CLOCK_JUMP:g} s, back "
+                       f"by more than {CLOCK_BACK:g} s and again to where it was, or a frame with no time: a gap in the "
+                       "log, its clock set, another system's clock, a message kept with its first time), splitting it "
+                       f"into {self.jumps + 1:,} stretches timed apart: {_count(self.across, 'exchange')} open across "
+                       "a split INCONCLUSIVE")
         if self.dissector.held or self.dissector.given_up:
             out.append(f"{len(self.dissector.held) + self.dissector.given_up:,} IP datagrams never reassembled "
                        "(fragments missing from the capture)")
@@ -389,3 +391,7 @@ def _when(t: float) -> str:
         return dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(timespec="microseconds")
     except (OverflowError, ValueError, OSError):  # a damaged or odd timestamp: no calendar date holds it
         return f"{t:.6f} s after 1970"
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n:,} {noun}{'s' if n != 1 else ''}"

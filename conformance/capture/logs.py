@@ -44,6 +44,8 @@ class LogReader(Protocol):
     format: str  # how reports name the format
     rules: CaptureRules  # what its frames are judged by
     edition: str  # the edition the reports name
+    addressed: bool  # whether its frames name the systems they are from and to (--src, --dst, --host apply)
+    gaps: bool  # whether ``units`` takes ``streams.GAP`` among the pieces (a stream read on after damage)
     notes: list[str]  # what the logs read so far say as a whole (for the report)
 
     def recognises(self, head: bytes) -> bool:
@@ -55,4 +57,7 @@ class LogReader(Protocol):
 
     def units(self, pieces: Iterator[bytes], damage: list[str], name: str) -> Iterator[Logged | Finding]:
         """Every frame of the log (decompressed ``pieces``), and findings on what it says of them; what cannot be
-        read is appended to ``damage`` (one line each, naming the log as ``name``) and ends the reading."""
+        read is appended to ``damage`` (one line each, naming the log as ``name``) and ends the reading. ``damage``
+        is the stream's own list, whose lines say what the stream found; where ``gaps``, a GAP among the pieces
+        follows bytes the stream's damage cut (the frame they begin is not whole: the reader drops it, adding no
+        line, one line for one damage); else a line in it when the pieces end says they stopped at damage."""

@@ -46,7 +46,7 @@ def command(args) -> int:
 
     targets = report_targets(args)
     window(args.start, args.end)
-    logs = [_opened(Path(p)) for p in args.files]
+    logs = [_Log(Path(p)) for p in args.files]  # each opened, its format recognised, and closed again
     try:
         suite, reader, notes, damage = _reader(args, logs)
         selection = Selection(None, frozenset(args.message), args.src, args.dst, args.host, args.start, args.end,
@@ -55,14 +55,14 @@ def command(args) -> int:
         started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
         began, complete = time.perf_counter(), True
         try:
-            for path, stream, _, pieces in logs:
-                _judge(judge, reader, path, stream, pieces, damage, len(logs) > 1)
+            for log in logs:  # one open at a time: memory and open files flat in the number of logs
+                _judge(judge, reader, log, damage, len(logs) > 1)
         except KeyboardInterrupt:
             complete = False
     finally:
-        for _, stream, _, _ in logs:
-            stream.handle.close()
-    result = judge.result(implementation=", ".join(p.name or str(p) for p, _, _, _ in logs), started=started,
+        for log in logs:
+            log.close()
+    result = judge.result(implementation=", ".join(log.path.name or str(log.path) for log in logs), started=started,
                           duration=round(time.perf_counter() - began, 3), strict=args.strict, title=suite.title,
                           notes=notes + reader.notes + damage, complete=complete)
     result.provenance = provenance(args, suite, {key: getattr(args, key) for key in (
@@ -70,10 +70,40 @@ def command(args) -> int:
     return finish(result, targets, damage, complete)
 
 
+class _Log:
+    """A log named on the command line: opened once to recognise its format by its first decompressed bytes
+    (``head``) and closed again, then opened again to be judged (``open``), so that only one is open at a time.
+    Standard input, which cannot be read twice, keeps its stream open between the two."""
+
+    def __init__(self, path: Path):
+        from ..capture.logs import HEAD
+
+        self.path, self.kept = path, None
+        stream, first, pieces = _opened(path)
+        self.head = first[:HEAD]
+        if str(path) == "-":
+            self.kept = stream, _again(first, pieces)
+        else:
+            stream.handle.close()
+
+    def open(self):
+        """(its stream, its decompressed pieces); ValueError with one line if it cannot be opened again."""
+        from ..capture.streams import open_stream
+
+        if self.kept is not None:
+            kept, self.kept = self.kept, None
+            return kept
+        stream = open_stream(self.path)
+        return stream, stream.pieces()
+
+    def close(self) -> None:
+        if self.kept is not None:
+            self.kept[0].handle.close()
+
+
 def _opened(path: Path):
-    """(path, its stream, the first HEAD bytes of its decompressed content, its decompressed pieces); a usage error
-    for a file that cannot be read or is empty."""
-    from ..capture.logs import HEAD
+    """(its stream, its first decompressed piece, the rest of its pieces); a usage error for a file that cannot be
+    read or is empty."""
     from ..capture.streams import open_stream
 
     try:
@@ -85,7 +115,7 @@ def _opened(path: Path):
     if not first:
         stream.handle.close()
         raise UsageError("; ".join(stream.damage) or f"{path}: empty, not a log")
-    return path, stream, first[:HEAD], _again(first, pieces)
+    return stream, first, pieces
 
 
 def _again(first: bytes, rest):
@@ -101,27 +131,34 @@ def _reader(args, logs):
     from ..arguments import chosen_edition
 
     explicit = args.suite is not None or args.vectors is not None
-    heads = [head for _, _, head, _ in logs]
     if explicit:
         suite = open_suite(args.suite or _default_suite(), args.vectors)
         reader = _log_reader(suite)
     else:
-        suite, reader = _recognising(heads[0], logs[0][0])
-    for path, _, head, _ in logs:
-        if not reader.recognises(head):
-            raise UsageError(f"{path}: not a {reader.format} log (it starts {head[:8].hex()})")
+        suite, reader = _recognising(logs[0].head, logs[0].path)
+    for log in logs:
+        if not reader.recognises(log.head):
+            raise UsageError(f"{log.path}: not a {reader.format} log (it starts {log.head[:8].hex()})")
     notes, damage, own = [], [], set()
-    for path, _, _, _ in logs:
-        found, said, problems = reader.beside(path, not explicit)
+    for log in logs:
+        found, said, problems = reader.beside(log.path, not explicit)
         notes += [n for n in said if n not in notes]
         damage += problems
         own.add(found)
     if len(own) > 1:
         raise UsageError("the logs come with different definitions beside them: judge them one at a time")
-    suite = own.pop() or suite
+    beside = own.pop()
+    if args.edition is not None and beside is not None and args.edition not in beside.editions \
+            and args.edition in suite.editions:
+        raise UsageError(f"the definitions beside the log (edition {', '.join(beside.editions)}) have no edition "
+                         f"{args.edition!r}: --suite {suite.name} judges it by the suite's own, which have")
+    suite = beside or suite
     if args.edition is not None:
         chosen_edition(suite, args.edition)
     reader = _log_reader(suite, args.edition)
+    if not reader.addressed and any(v is not None for v in (args.src, args.dst, args.host)):
+        raise UsageError(f"--src, --dst and --host do not apply to a {reader.format}: its messages name no system "
+                         "(--message and --start/--end do)")
     known_groups(suite, args.message, reader.rules.keys)
     return suite, reader, notes, damage
 
@@ -157,15 +194,24 @@ def _recognising(head: bytes, path: Path):
                      f"{head[:8].hex()}")
 
 
-def _judge(judge, reader, path: Path, stream, pieces, damage: list[str], named: bool) -> None:
-    """Feed every frame of one log to the judge, and what the log says of its frames."""
+def _judge(judge, reader, log: _Log, damage: list[str], named: bool) -> None:
+    """Feed every frame of one log to the judge, and what the log says of its frames; close it."""
     from ..capture.logs import Logged
 
-    source, said = f"{path.name} " if named else "", []
+    try:
+        stream, pieces = log.open()
+    except ValueError as exc:  # gone or changed since its format was recognised
+        damage.append(str(exc))
+        return
+    stream.gaps = reader.gaps
+    source, path = f"{log.path.name} " if named else "", log.path
     logged, found = judge.logged, judge.found
-    for unit in reader.units(pieces, said, str(path)):
-        if unit.__class__ is Logged:
-            logged(unit, source)
-        else:
-            found(unit, source)
-    damage += stream.damage + said
+    try:
+        for unit in reader.units(pieces, stream.damage, str(path)):  # the stream's lines and the reader's, in order
+            if unit.__class__ is Logged:
+                logged(unit, source)
+            else:
+                found(unit, source)
+    finally:
+        stream.handle.close()
+    damage += stream.damage

@@ -153,8 +153,7 @@ def command(args) -> int:
         session.close()
         if recorder is not None:
             # a run stopped at its first failure (--exitfirst) recorded only part of the exchange, as an interrupted one
-            stopped = args.exitfirst and result is not None and any(failing(c.verdict, args.strict) for c in result.cases)
-            recorder.close(complete=result is not None and result.complete and not stopped)
+            recorder.close(complete=result is not None and result.complete)
     if args.shard:
         result.shard = args.shard
         result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's {total} "
@@ -177,7 +176,7 @@ def command(args) -> int:
             doc = waivers_document([c.id for c in result.cases if failing(c.verdict, strict=False)], reason)
         problems += write_file(Path(args.write_waivers), json.dumps(doc, indent=1) + "\n",
                                f"waivers file ({len(doc['waivers'])} waivers)", console)
-    if not result.complete:
+    if not result.complete and not result.stopped:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     say_untested(result)

@@ -3,7 +3,8 @@
 A case that fails (or, NON_STRICT, names the wrong rule) has one cause: what it is about (the rule its input breaks,
 the implementation-defined class it belongs to; else "valid input", whatever value class it exercises, since one
 defect fails valid cases of many classes, or the family of a case of another kind, the third segment of its id) and
-what went wrong with it (accepted what breaks the rule, a check that fails, a crash).
+what went wrong with it (accepted what breaks the rule, a check that fails, a crash); a capture's or a log's case
+is about what was recorded (frames that break a rule, exchanges that fail a check).
 Cases with the same cause form a group, whatever message they are filed under; groups come largest first, each with
 its cases, its messages and the errata that explain its cases (an implementation without errata gets the same
 groups). Suite-generic: the causes come from the case's data (``rule``, ``class``), or, for a result read back
@@ -19,6 +20,8 @@ from typing import Callable, Iterable
 from .verdicts import Verdict, failing
 
 SHOWN_IN_TITLE = 3  # ops or classes named in a title before "…"
+RECORDED = {"frame": "frames", "exchange": "exchanges", "connection": "connections"}  # what a capture's or a log's
+# cases are about (``<suite>/<group>/capture/<kind>/...``): they judge what was recorded, not an implementation's answer
 VERBS = {Verdict.CRASH: "crashes on", Verdict.TIMEOUT: "times out on", Verdict.ADAPTER_ERROR: "adapter error on"}
 
 
@@ -94,6 +97,11 @@ def cause_of(case, data: dict | None = None) -> tuple[str, str] | None:
     if verdict is Verdict.WAIVER_STALE:
         return "waiver-stale", "waived, but passes now: the waiver must go"
     key, words = about(case, data)
+    parts = case.id.split("/", 4)
+    if len(parts) > 3 and parts[2] == "capture" and parts[3] in RECORDED:  # what recorded traffic or a log holds
+        what = key if key.startswith("rule:") else parts[3] + ("/" + parts[4] if len(parts) > 4 else "")
+        return f"recorded/{what}", (f"recorded {RECORDED[parts[3]]} that break {words}" if key.startswith("rule:")
+                                    else f"recorded {RECORDED[parts[3]]} that fail {parts[-1]}")
     did = "+".join(ops(case)[:SHOWN_IN_TITLE]) or "the case"
     if verdict in VERBS:
         return f"{verdict.value.lower()}/{did}/{key}", f"{VERBS[verdict]} {did}: {words}"

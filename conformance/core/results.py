@@ -151,6 +151,7 @@ class RunResult:
     causes: list[Cause] | None = None  # the failures grouped by cause (core.causes), made when first asked for
     stale_waivers: list[str] = field(default_factory=list)  # broad waivers (e.g. "cause accepts/rule:crc") that waived
     # nothing of the cases they name: the run fails as for a WAIVER_STALE case
+    stopped: bool = False  # not complete because it stopped at its first failing case (--exitfirst), not interrupted
 
     def cause_groups(self) -> list[Cause]:
         """The failing and NON_STRICT cases grouped by cause, largest first (as the run grouped them, or from what
@@ -174,10 +175,10 @@ class RunResult:
         return list(dict.fromkeys(source_case(c.id) for c in self.cases if c.verdict in ATTENTION))
 
     def exit_code(self) -> int:
-        """130 if interrupted; else 2 for an adapter error or protocol violation, or when nothing was tested
+        """130 if interrupted (not stopped at its first failure); else 2 for an adapter error or protocol violation, or when nothing was tested
         (every case INCONCLUSIVE or UNSUPPORTED; a shard of no case tested all it was given); else 1 for a failing
         verdict, a crash or gone incident or (under --strict) a check kind left untested; else 0."""
-        if not self.complete:
+        if not self.complete and not self.stopped:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
         if Verdict.ADAPTER_ERROR in verdicts or any(i.kind == "protocol" for i in self.incidents):
@@ -228,7 +229,9 @@ class RunResult:
                    [Incident(**i) for i in doc.get("incidents", ())], doc.get("untested", []),
                    (doc["shard"]["index"], doc["shard"]["of"]) if "shard" in doc else None,
                    Provenance(**doc["provenance"]) if "provenance" in doc else None, causes,
-                   doc.get("stale_waivers", []))
+                   doc.get("stale_waivers", []),
+                   # not complete, yet not exiting as interrupted: stopped at its first failing case
+                   not doc.get("complete", True) and doc.get("exit_code", INTERRUPTED) != INTERRUPTED)
 
 
 def format_version(doc) -> int:

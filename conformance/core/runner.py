@@ -150,10 +150,11 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     stale = [w.selector for w in waivers.stale()] if complete and not stopped_at else []
     notes += [stale_note(s) for s in stale]
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
-                     round(clock() - began, 3), messages, session.stderr, notes, complete,
+                     round(clock() - began, 3), messages, session.stderr, notes, complete and not stopped_at,
                      list(session.incidents), untested, causes=causes,
                      provenance=replace(provenance, errata=errata) if provenance is not None else None,
-                     stale_waivers=stale)
+                     stale_waivers=stale,
+                     stopped=complete and bool(stopped_at))
 
 
 def case_verdict(checks: list[CheckResult], waiver: Waiver | None) -> Verdict:

@@ -56,7 +56,8 @@ def render_markdown(result: RunResult) -> str:
         lines.append(f"| {cell(m.name)} ({cell(m.key)}) | {OVERALL.get(m.verdict, '')} {m.verdict} | "
                      + " | ".join(str(counts[v] or "") for v in columns) + " |")
     if not result.complete:
-        lines += ["", "**Incomplete run**: it was interrupted; only the cases done so far are counted."]
+        lines += ["", f"**Incomplete run**: it {'stopped at its first failing case' if result.stopped else 'was interrupted'};"
+                  " only the cases done so far are counted."]
     if result.incidents:
         lines += [""] + [f"- ⚠️ {cell(line, 1000)}" for line in incident_lines(result)]
     if result.notes:

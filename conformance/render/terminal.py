@@ -46,7 +46,8 @@ def safe(text: str | None) -> str:
 def print_result(result: RunResult, console: Console) -> None:
     print_causes(result, console)
     title = f"{result.implementation} — {result.title} corpus, edition {result.edition}"
-    table = Table(title=safe(title + ("" if result.complete else " (INCOMPLETE: interrupted)")))
+    table = Table(title=safe(title + ("" if result.complete else " (INCOMPLETE: stopped at its first failing case)"
+                                      if result.stopped else " (INCOMPLETE: interrupted)")))
     table.add_column("message")
     table.add_column("key", justify="right")
     table.add_column("verdict")
@@ -88,5 +89,5 @@ def print_result(result: RunResult, console: Console) -> None:
     summary = ", ".join(f"{n} {v}" for v, n in result.summary.items())
     explained = sum(1 for c in shown if c.errata)
     errata = "1 failure is a documented erratum" if explained == 1 else f"{explained} failures are documented errata"
-    console.print(f"{counted(len(result.cases), 'case')} in {result.duration:.2f} s: {summary}"
+    console.print(f"{counted(len(result.cases), 'case')} in {result.duration:.2f} s" + (f": {summary}" if summary else "")
                   + (f" ({errata})" if explained else ""))

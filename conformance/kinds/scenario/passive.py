@@ -108,6 +108,30 @@ class PassiveExchanges:
         a log's clock jumped): a request left unanswered across that time is not judged."""
         self.losses.append((start, end, why))
 
+    def split(self, why: str) -> tuple[list[Finding], int]:
+        """The frames' clock jumped (``why``): no bound can be timed across the jump, so every exchange still open is
+        closed INCONCLUSIVE (never PASS, never FAIL), and the next frames begin afresh (a reply to a request before
+        the jump answers nothing). The findings, and how many exchanges were open."""
+        out, count = [], 0
+        for queue in self.open.values():
+            for o in queue:
+                if o.answered:
+                    found = [f for f in self._expired(o) if f.verdict is not Verdict.PASS]
+                else:
+                    found = [self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
+                                           f"no {o.rule.exchange['reply']} {self._between(o)} before {why}", o.request)]
+                for f in found:
+                    f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}" if o.answered \
+                        else f.detail
+                count += bool(found)
+                out += found
+        for table in (self.open, self.ended):
+            for queue in table.values():
+                queue.clear()
+        self.keyed.clear()
+        self.next_deadline = float("inf")
+        return out, count
+
     def finish(self, end: float) -> list[Finding]:
         """Judge what the end of the capture decides; a request whose bound reaches past it is INCONCLUSIVE."""
         out = self._expire(end)

@@ -17,6 +17,7 @@ from itertools import chain
 from pathlib import Path
 
 from ...capture.logs import Logged
+from ...capture.streams import GAP
 from . import codec
 from .crc16 import arc
 
@@ -31,6 +32,8 @@ class LsfReader:
     """Reads LSF logs for the IMC suite ``suite``: frames judged by its capture rules."""
 
     format = "LSF"
+    addressed = True
+    gaps = True
 
     def __init__(self, suite, edition: str | None):
         self.suite, self.rules = suite, suite.capture_rules()
@@ -51,6 +54,9 @@ class LsfReader:
         buf, pos, base, number = b"", 0, 0, 0  # base: the log's byte at buf[0]
         skipped, ids = _Skipped(), self.ids
         for piece in chain(pieces, (b"",)):  # then b"": the end of the log
+            if piece is GAP:  # what follows does not follow (damage the stream said): the frame it cuts is dropped
+                buf, base, pos = b"", base + len(buf), 0
+                continue
             last = not piece
             buf, base, pos = buf[pos:] + piece, base + pos, 0
             n = len(buf)

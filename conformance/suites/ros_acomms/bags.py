@@ -4,7 +4,9 @@ edition: which edition recorded it, or none), and every message on it is decoded
 types are counted and left alone.
 
 The bag is read record by record from its start, chunk by chunk (each decompressed whole, at most CHUNK_LIMIT
-bytes), and its index is only checked, never needed: a bag whose recording was not closed has none, and one cut
+bytes, and all of them together bounded against the bag's bytes as a compressed stream is: ``streams.BOMB_RATIO``
+past ``streams.BOMB_FLOOR``), a connection record at most HEADER_LIMIT bytes inside a chunk as outside, a message
+decoded only up to MESSAGE_LIMIT bytes; and its index is only checked, never needed: a bag whose recording was not closed has none, and one cut
 short or damaged is read as far as it goes. That is why the reading is the suite's own and not rosbags' Reader
 (which the tests hold it to): rosbags needs an intact index, holds every message's index entry in memory and
 decompresses a chunk with no bound. A chunk compressed with lz4 needs the ``lz4`` package, which the ``ros``
@@ -20,6 +22,7 @@ from pathlib import Path
 
 from ...capture.findings import Frame, Finding
 from ...capture.logs import Logged
+from ...capture import streams
 from ...capture.streams import Reader, Short
 from ...core.verdicts import Verdict
 from ...schemas import shorten
@@ -35,6 +38,9 @@ HEADER_LIMIT = 4 << 20  # bytes of a record's header (a connection's holds the f
 CHUNK_LIMIT = 128 << 20  # bytes of a chunk held at once, compressed and decompressed (rosbag writes 768 KB ones)
 MD5_CLAUSE = "ros-acomms#ros-1-md5-checksums"
 UNKNOWN = "unknown-definition"  # messages of a connection whose definition no edition has: not judged
+TOO_LARGE = "too-large-to-decode"  # a message beyond MESSAGE_LIMIT: not judged
+MESSAGE_LIMIT = 4 << 20  # bytes of a message decoded whole (ros_acomms' are of a few kB)
+DEFINITION_LIMIT = 1 << 20  # characters of a connection's definition text read (ros_acomms_msgs': a few kB each)
 LISTED = 3  # differences named per edition
 NAMED = 120  # characters of a topic or a type's name a report shows (the bag's text: it may be megabytes)
 
@@ -66,6 +72,8 @@ class BagReader:
     edition that recorded it, the same for every connection of a type)."""
 
     format = "ROS 1 bag"
+    addressed = False  # a message names no system (ros_acomms' addresses are fields of some types)
+    gaps = False  # a bag is read up to damage in its stream, never on after it
 
     def __init__(self, suite, edition: str | None):
         self.suite, self.judged = suite, edition
@@ -88,10 +96,11 @@ class BagReader:
             damage.append(f"{name}: {exc}: the bag is read up to it")
         except Short as exc:
             where = f"at byte {bag.src.offset + exc.got:,}, inside the record that begins at byte {bag.record:,}"
-            damage.append(f"{name}: its index is cut short {where}: every chunk before it was read" if bag.index_begins
-                          else f"{name}: the bag ends {where} (cut short): read up to it")
+            if not damage:  # else the stream stopped at damage it said: the bag does not end here
+                damage.append(f"{name}: its index is cut short {where}: every chunk before it was read"
+                              if bag.index_begins else f"{name}: the bag ends {where} (cut short): read up to it")
         else:
-            damage += [f"{name}: {problem}" for problem in bag.index_problems()]
+            damage += [] if damage else [f"{name}: {problem}" for problem in bag.index_problems()]
         self.notes += bag.summary(name)
 
 
@@ -109,6 +118,9 @@ class _Channel:
             return Frame(None, outside=self.full)
         if self.view is None:
             return Frame(self.group, UNKNOWN, 0, self.why, MD5_CLAUSE, undecided=True)
+        if len(payload) > MESSAGE_LIMIT:  # decoded whole, its values would take ten to twenty times its size
+            return Frame(self.group, TOO_LARGE, 0, f"{len(payload):,} bytes, more than the {MESSAGE_LIMIT >> 20} MB "
+                         "a message is decoded whole up to: not judged", "", undecided=True)
         try:
             codec.decode(self.view, self.full, payload)
         except FrameError as exc:
@@ -129,6 +141,7 @@ class _Bag:
         self.index_begins = False  # a record begins where the bag header says the index does
         self.index_found = [0, 0]  # connection and chunk info records outside the chunks (the index's)
         self.chunks_read = 0
+        self.unpacked = 0  # bytes the chunks read so far hold decompressed
 
     def read(self) -> Iterator[Logged | Finding]:
         if self.src.take(len(MAGIC)) != MAGIC:
@@ -171,12 +184,21 @@ class _Bag:
         if size > CHUNK_LIMIT:
             raise Damage(f"the chunk at byte {at:,} holds {size:,} bytes decompressed, more than the "
                          f"{CHUNK_LIMIT >> 20} MB read at once")
+        self.unpacked += size  # the bag's chunks decompressed, against its bytes read: a bomb, as a stream's
+        if self.unpacked > streams.BOMB_FLOOR and self.unpacked > streams.BOMB_RATIO * self.src.offset:
+            raise Damage(f"its chunks up to the one at byte {at:,} ({self.chunks_read:,} of them) hold "
+                         f"{self.unpacked >> 20} MB out of its first {self.src.offset:,} bytes, more than "
+                         f"{streams.BOMB_RATIO} times their size (no bag compresses so well: a decompression bomb?): "
+                         "refused from there")
         content = _decompressed(fields.get("compression", b""), data, size, at)
         inner = Reader([content] if content else [])
         while not inner.at_end():
             start = inner.offset
             try:
                 op, record, length = _record_head(inner, at)
+                if op == CONNECTION and length > HEADER_LIMIT:  # its definition: bounded as outside a chunk
+                    raise Damage(f"the connection record in the chunk at byte {at:,} (byte {start:,} of its data) "
+                                 f"holds {length:,} bytes, more than the {HEADER_LIMIT >> 20} MB read at once")
                 body = inner.take(length)
             except Short:
                 raise Damage(f"the record at byte {start:,} of the chunk at byte {at:,} runs past the chunk's "
@@ -221,6 +243,10 @@ class _Bag:
 
         def finding(case: str, verdict: Verdict, detail: str = "", cited: str = clause) -> Finding:
             return Finding(group, f"connection/{case}", verdict, cited, detail, where=f"topic {topic}", label=label)
+        if len(definition) > DEFINITION_LIMIT:  # read, its lines would take fifty times its size
+            why = f"its definition text holds {len(definition):,} characters, more than the {DEFINITION_LIMIT >> 10} kB read"
+            self._recorded("no edition (a definition too large to read)", topic)
+            return [finding("definition", Verdict.INCONCLUSIVE, why)], None, f"{why}: not judged"
         try:
             parsed = parse_full_text(definition, full)
             own = text_md5(parsed, full)
@@ -341,6 +367,7 @@ def _text(raw: bytes) -> str:
 
 def _decompressed(compression: bytes, data: bytes, size: int, at: int) -> bytes:
     """A chunk's records, decompressed to at most ``size`` bytes (what its header says they are)."""
+    decoder = None
     if compression == b"none":
         out, whole = data, True
     elif compression == b"bz2":
@@ -365,8 +392,21 @@ def _decompressed(compression: bytes, data: bytes, size: int, at: int) -> bytes:
     else:
         raise Damage(f"the chunk at byte {at:,} is compressed with {_text(compression)[:40]!r}, which no bag uses")
     if len(out) > size:
-        raise Damage(f"the chunk at byte {at:,} holds more than the {size:,} bytes its header says")
+        raise Damage(_beyond(decoder, _text(compression), data, size, at))
     if len(out) < size or not whole:
         raise Damage(f"the chunk at byte {at:,} holds {len(out):,} bytes where its header says {size:,}, or its "
                      "compressed data is cut")
     return out
+
+
+def _beyond(decoder, kind: str, data: bytes, size: int, at: int) -> str:
+    """What is wrong with a chunk that decompresses to more than its header says: its compressed data, where the
+    decoder, read on (its output unkept, bounded as a bomb is), says so; else its header."""
+    made = size
+    try:
+        while decoder is not None and not decoder.eof and decoder.needs_input is False and \
+                made <= max(streams.BOMB_FLOOR, streams.BOMB_RATIO * len(data)):
+            made += len(decoder.decompress(b"", 1 << 20))
+    except (OSError, ValueError, EOFError, RuntimeError) as exc:
+        return f"the chunk at byte {at:,} is damaged {kind} data ({exc})"
+    return f"the chunk at byte {at:,} holds more than the {size:,} bytes its header says"
