@@ -1,0 +1,57 @@
+"""What a requester does when the link loses its request, sans-IO: for each request of an idempotent exchange
+(exchanges.json ``idempotent``) that the relay did not deliver intact, whether its requester sent it again within
+the exchange's bound. The suite names the ambiguity that records the answer (a requester's resending is the
+suite's reading, not a rule): a resend is a PASS, none an IMPL_DEFINED reading, never a FAIL."""
+
+from __future__ import annotations
+
+from ..capture.findings import Finding
+from ..core.verdicts import Verdict
+from ..kinds.scenario.matchers import hashable
+
+CASE = "requester/resend-after-loss"
+
+
+class ResendWatch:
+    """``rules``: the exchanges tracker's rules (by request message); ``ambiguity``: (id, clause) of the reading."""
+
+    def __init__(self, by_request: dict, ambiguity: tuple[str, str]):
+        self.by_request, (self.ambiguity, self.clause) = by_request, ambiguity
+        self.pending: dict[tuple, tuple[float, float, str, object]] = {}  # key -> (lost at, deadline, group, where)
+        self.judged: set[tuple] = set()  # requests judged once (a resend lost again is not judged again)
+
+    def _key(self, group: str, frame) -> tuple | None:
+        if frame is None or frame.fields is None:
+            return None
+        for rule in self.by_request.get(group, ()):
+            if rule.exchange.get("idempotent") and all(hashable(frame.fields.get(f)) in v for f, v in rule.when.items()):
+                return (rule.exchange["id"], frame.src, frame.dst, hashable(frame.fields)), rule.within
+        return None
+
+    def undelivered(self, t: float, group: str, frame, where) -> None:
+        """A datagram the link did not deliver intact, sent at ``t``."""
+        found = self._key(group, frame)
+        if found is not None and found[0] not in self.judged and found[0] not in self.pending:
+            key, within = found
+            self.pending[key] = (t, t + 2 * within, group, where)
+
+    def sent(self, t: float, group: str, frame) -> list[Finding]:
+        """A datagram a side sent: a resend of a lost request?"""
+        out = self.expire(t)
+        found = self._key(group, frame)
+        if found is not None and found[0] in self.pending:
+            lost, _, group, where = self.pending.pop(found[0])
+            self.judged.add(found[0])
+            out.append(Finding(group, f"{CASE}/{found[0][0]}", Verdict.PASS, self.clause,
+                               f"resent {t - lost:.3f} s after the relay lost it", None, t, None, where))
+        return out
+
+    def expire(self, t: float) -> list[Finding]:
+        out = []
+        for key in [k for k, (_, deadline, _, _) in self.pending.items() if deadline <= t]:
+            lost, deadline, group, where = self.pending.pop(key)
+            self.judged.add(key)
+            out.append(Finding(group, f"{CASE}/{key[0]}", Verdict.IMPL_DEFINED, self.clause,
+                               f"the relay lost this request; its requester did not send it again within "
+                               f"{deadline - lost:g} s (open reading {self.ambiguity})", None, lost, None, where))
+        return out
