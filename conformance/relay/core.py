@@ -54,14 +54,15 @@ class Relay:
             self.endpoints[side] = source
         origin, relay = source, self.facing[side]
         self.counts[side]["sent"] += 1
-        self.judges[side].received(Datagram(next(self.number), t, origin[0], origin[1], relay[0], relay[1], data))
+        sent = Datagram(next(self.number), t, origin[0], origin[1], relay[0], relay[1], data)
+        self.judges[side].received(sent)
         if self.record:
             self.record(t, origin, relay, data, f"{side} sent")
         frame = self.rules.frame(data)
         if frame is not None and frame.src is not None:
             self.systems[side].add(frame.src)
         if self.resend and frame is not None and frame.group is not None:
-            for finding in self.resend[side].sent(t, frame.group, frame):
+            for finding in self.resend[side].sent(sent, frame.group, frame):
                 self.judges[side].found(finding)
         to = OTHER[side]
         if self.rewrite is not None:
@@ -71,10 +72,10 @@ class Relay:
         fate = self.links[side].carry(t, data)
         if fate.dropped is not None:
             self.counts[side][fate.dropped] += 1
-            self._undelivered(t, side, frame, fate.dropped, origin)
+            self._undelivered(sent, side, frame, fate.dropped)
             return
         for when, copy, note in fate.copies:
-            heapq.heappush(self.queue, (when, next(self.order), to, copy, note, t, frame, origin))
+            heapq.heappush(self.queue, (when, next(self.order), to, copy, note, sent, frame))
             if note:
                 for what in note.split(", "):
                     self.counts[side][what.split(" ")[0] if what.startswith(("held", "byte")) else what] += 1
@@ -83,7 +84,7 @@ class Relay:
         """The datagrams to deliver by ``t``: (the side they go to, their bytes)."""
         out = []
         while self.queue and self.queue[0][0] <= t:
-            when, _, to, data, note, sent, frame, origin = heapq.heappop(self.queue)
+            when, _, to, data, note, sent, frame = heapq.heappop(self.queue)
             relay, endpoint = self.facing[to], self.endpoints[to]
             if endpoint is None:  # the console has not spoken yet: nowhere to send
                 self.counts[OTHER[to]]["undeliverable (the console had not spoken yet)"] += 1
@@ -92,7 +93,7 @@ class Relay:
             if self.record:
                 self.record(when, relay, endpoint, data, f"{to} received" + (f" ({note})" if note else ""))
             if "byte" in note:  # changed on the way: the receiver sees no frame of the sender's
-                self._undelivered(sent, OTHER[to], frame, "corrupted", origin, until=when)
+                self._undelivered(sent, OTHER[to], frame, "corrupted", until=when)
             else:
                 self.judges[to].received(Datagram(next(self.number), when, relay[0], relay[1], endpoint[0],
                                                   endpoint[1], data))
@@ -101,10 +102,10 @@ class Relay:
             out.append((to, data))
         return out
 
-    def _undelivered(self, t: float, side: str, frame, why: str, origin, until: float | None = None) -> None:
-        """The datagram ``side`` sent at ``t`` did not reach the other side intact: the requests it may have cost
-        are not judged, in each side's view, for the systems whose requests they are."""
-        to = OTHER[side]
+    def _undelivered(self, sent: Datagram, side: str, frame, why: str, until: float | None = None) -> None:
+        """The datagram ``side`` sent did not reach the other side intact: the requests it may have cost are not
+        judged, in each side's view, for the systems whose requests they are."""
+        to, t = OTHER[side], sent.time
         src = {frame.src} if frame is not None and frame.src is not None else set(self.systems[side]) or None
         dst = ({frame.dst} if frame is not None and frame.dst is not None and frame.dst not in ANYONE
                else set(self.systems[to]) or None)
@@ -114,8 +115,7 @@ class Relay:
         if frame is not None and frame.group in self.introductions and frame.src is not None:
             self.unknown.setdefault((to, frame.src), t)
         if self.resend and frame is not None and frame.group is not None:
-            self.resend[side].undelivered(t, frame.group, frame, Datagram(0, t, origin[0], origin[1],
-                                                                           self.facing[side][0], self.facing[side][1], b""))
+            self.resend[side].undelivered(sent, frame.group, frame)
 
     def _introduced(self, side: str, system: int, t: float) -> None:
         """``side`` got an introduction of ``system`` at ``t``: since the one lost before it, the requests of

@@ -5,6 +5,7 @@ suite's reading, not a rule): a resend is a PASS, none an IMPL_DEFINED reading, 
 
 from __future__ import annotations
 
+from ..capture.datagrams import Datagram
 from ..capture.findings import Finding
 from ..core.verdicts import Verdict
 from ..kinds.scenario.matchers import hashable
@@ -17,7 +18,7 @@ class ResendWatch:
 
     def __init__(self, by_request: dict, ambiguity: tuple[str, str]):
         self.by_request, (self.ambiguity, self.clause) = by_request, ambiguity
-        self.pending: dict[tuple, tuple[float, float, str, object]] = {}  # key -> (lost at, deadline, group, where)
+        self.pending: dict[tuple, tuple[float, str, Datagram]] = {}  # key -> (deadline, group, the datagram lost)
         self.judged: set[tuple] = set()  # requests judged once (a resend lost again is not judged again)
 
     def _key(self, group: str, frame) -> tuple | None:
@@ -28,30 +29,32 @@ class ResendWatch:
                 return (rule.exchange["id"], frame.src, frame.dst, hashable(frame.fields)), rule.within
         return None
 
-    def undelivered(self, t: float, group: str, frame, where) -> None:
-        """A datagram the link did not deliver intact, sent at ``t``."""
+    def undelivered(self, sent: Datagram, group: str, frame) -> None:
+        """A datagram the link did not deliver intact."""
         found = self._key(group, frame)
         if found is not None and found[0] not in self.judged and found[0] not in self.pending:
             key, within = found
-            self.pending[key] = (t, t + 2 * within, group, where)
+            self.pending[key] = (sent.time + 2 * within, group, sent)
 
-    def sent(self, t: float, group: str, frame) -> list[Finding]:
+    def sent(self, sent: Datagram, group: str, frame) -> list[Finding]:
         """A datagram a side sent: a resend of a lost request?"""
-        out = self.expire(t)
+        out = self.expire(sent.time)
         found = self._key(group, frame)
         if found is not None and found[0] in self.pending:
-            lost, _, group, where = self.pending.pop(found[0])
+            _, group, lost = self.pending.pop(found[0])
             self.judged.add(found[0])
             out.append(Finding(group, f"{CASE}/{found[0][0]}", Verdict.PASS, self.clause,
-                               f"resent {t - lost:.3f} s after the relay lost it", None, t, None, where))
+                               f"resent {sent.time - lost.time:.3f} s after the relay lost it (frame {lost.number})",
+                               sent.number, sent.time, None, sent))
         return out
 
     def expire(self, t: float) -> list[Finding]:
         out = []
-        for key in [k for k, (_, deadline, _, _) in self.pending.items() if deadline <= t]:
-            lost, deadline, group, where = self.pending.pop(key)
+        for key in [k for k, (deadline, _, _) in self.pending.items() if deadline <= t]:
+            deadline, group, lost = self.pending.pop(key)
             self.judged.add(key)
             out.append(Finding(group, f"{CASE}/{key[0]}", Verdict.IMPL_DEFINED, self.clause,
                                f"the relay lost this request; its requester did not send it again within "
-                               f"{deadline - lost:g} s (open reading {self.ambiguity})", None, lost, None, where))
+                               f"{deadline - lost.time:g} s (open reading {self.ambiguity})", lost.number, lost.time,
+                               lost.payload, lost))
         return out
