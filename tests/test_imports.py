@@ -7,8 +7,8 @@ from the bottom:
 - ``core``: the suite-generic core (results, runner, sessions and suites as contracts); it imports nothing else;
 - ``base``: what every layer above may use: bounds, errors, escaping, bounded reading, the cache, schema checks,
   the types of the command line's values, the adapter API, building native programs, the restart command;
-- ``capture``, ``kinds``, ``render``, ``sessions`` (with the live options), ``fuzz`` (and the adapter check): the
-  machinery, each only on those before it;
+- ``capture``, ``kinds``, ``relay``, ``render``, ``sessions`` (with the live options), ``fuzz`` (and the adapter
+  check): the machinery, each only on those before it;
 - ``suites``: each suite over that machinery (a suite imports no other suite);
 - ``tools``: what is built on a suite (the scapy layer, the adapters of real implementations);
 - ``files``: opening a suite's corpus, waivers and saved results;
@@ -33,6 +33,7 @@ LAYERS = [
               "native", "restart"]),
     ("capture", ["capture"]),
     ("kinds", ["kinds"]),
+    ("relay", ["relay"]),
     ("render", ["render"]),
     ("sessions", ["sessions", "live"]),
     ("fuzz", ["fuzz", "adaptercheck"]),
