@@ -10,7 +10,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test docs screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters
+.PHONY: conformance test docs screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters relay
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -59,6 +59,22 @@ benchmark: $(VENV)/.installed
 cpp-adapters: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter dune-cpp --json reports/dune-cpp.json
 	$(VENV)/bin/imc-conformance run --suite ros_acomms --adapter roscpp --json reports/roscpp.json; test $$? -le 1
+
+# Two implementations judged through the relay on loopback: the reference node (serve) as the vehicle, the suite's own
+# session (run, the scenarios of three queries) as the console; over a clean link, then over one losing 30% of the
+# datagrams each way with a 2 s delay (seed 1). The relay's reports: reports/relay-clean.* and reports/relay-lossy.*.
+RELAY_RUN = --message AcousticSystemsQuery --message LblConfig --message HistoricDataQuery --no-progress
+relay: $(VENV)/.installed
+	mkdir -p reports
+	for link in clean: lossy:loss=0.3,delay=2; do name=$${link%%:*}; \
+	  $(VENV)/bin/imc-conformance serve --port 26002 2> reports/relay-$$name-vehicle.log & vehicle=$$!; \
+	  $(VENV)/bin/imc-conformance relay udp://127.0.0.1:26010 --vehicle udp://127.0.0.1:26002 --impair "$${link#*:}" \
+	    --seed 1 --duration 900 --pcap reports/relay-$$name.pcapng --json reports/relay-$$name.json \
+	    --html reports/relay-$$name.html > reports/relay-$$name.txt & relay=$$!; \
+	  sleep 2; $(VENV)/bin/imc-conformance run --target udp://127.0.0.1:26010 $(RELAY_RUN) \
+	    --json reports/relay-$$name-console.json > /dev/null; \
+	  sleep 3; kill -TERM $$relay; wait $$relay; kill -TERM $$vehicle; wait $$vehicle; \
+	  tail -n 1 reports/relay-$$name.txt; done
 
 # DUNE (LSTS's IMC node) as a live target: built once from the imcpy sdist into the cache (10-30 min on 2 cores),
 # then the scenario set against it inside a private network namespace (needs root for unshare --net), then live

@@ -48,7 +48,7 @@ def test_a_correct_pair_gets_no_fail_under_30_percent_loss_and_2_s_delay(seed):
     assert all(relay.counts[side]["lost (loss)"] > 20 for side in SIDES)
     vehicle = verdicts(result, "vehicle")
     assert vehicle["imc/AcousticSystemsQuery/capture/exchange/acoustic-systems/to-requester"] is Verdict.PASS
-    resent = [c for c in result.cases if "/requester/resend-after-loss/" in c.id]
+    resent = [c for c in result.cases if "/request/resend-after-loss/" in c.id]
     assert resent and any(ch.verdict is Verdict.PASS for c in resent for ch in c.checks)
 
 
@@ -62,7 +62,7 @@ def test_requests_lost_on_a_link_that_is_down_are_nobodys_failure():
 
 def test_a_console_that_never_resends_a_query_is_caught():
     _, _, result = simulate(180, LOSSY, console=Console(tries=1))
-    resent = [c for c in result.cases if "/requester/resend-after-loss/" in c.id]
+    resent = [c for c in result.cases if "/request/resend-after-loss/" in c.id]
     assert resent and {c.verdict for c in resent} == {Verdict.IMPL_DEFINED}  # a reading the seeds leave open
     assert all(ch.verdict is Verdict.IMPL_DEFINED for c in resent for ch in c.checks)
     assert all(any("(open reading resend-after-loss)" in ch.detail for ch in c.checks) for c in resent)

@@ -10,7 +10,7 @@ from ..capture.findings import Finding
 from ..core.verdicts import Verdict
 from ..kinds.scenario.matchers import hashable
 
-CASE = "requester/resend-after-loss"
+CASE = "request/resend-after-loss"
 
 
 class ResendWatch:
