@@ -10,7 +10,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test docs screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters relay
+.PHONY: conformance test docs screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters relay dune-relay
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -84,6 +84,12 @@ dune: $(VENV)/.installed
 
 dune-conformance: dune
 	$(VENV)/bin/python -m imc_conformance.suites.imc.dune conformance
+
+# DUNE against DUNE through the relay in a private network namespace: lauv-simulator-1 as the vehicle, lauv-xplore-2 as
+# the console, a minute over a clean link and a minute losing 30% of the datagrams each way with a 2 s delay
+# (reports/dune-relay-{clean,impaired}.{json,html,pcapng}). Never in CI.
+dune-relay: dune
+	$(VENV)/bin/python -m imc_conformance.suites.imc.dune relay
 
 # DUNE's own traffic for a minute (every message lauv-simulator-1 transports), recorded in its namespace, then judged
 # message by message with the whole protocol; and the mission log DUNE wrote meanwhile, judged with the IMC.xml

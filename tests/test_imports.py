@@ -15,7 +15,7 @@ from the bottom:
 - ``commands``: the command line, one module per command;
 - ``programs``: the entry points nothing imports: the CLI, the pytest plugin, the benchmark, the hypothesis
   properties for pytest and HypoFuzz, the worker process of a library adapter, and the DUNE scripts of
-  ``make dune-conformance``.
+  ``make dune-conformance`` and ``make dune-relay``.
 
 A module belongs to the layer of the longest prefix that names it; a module no layer names fails the test, so a new
 package is placed on purpose.
@@ -42,7 +42,7 @@ LAYERS = [
     ("files", ["files"]),
     ("commands", ["commands"]),
     ("programs", ["cli", "pytest_plugin", "benchmark", "fuzz.properties", "sessions.worker",
-                  "suites.imc.dune.conformance", "suites.imc.dune.__main__"]),
+                  "suites.imc.dune.conformance", "suites.imc.dune.relay", "suites.imc.dune.__main__"]),
 ]
 PACKAGE = "imc_conformance"
 

@@ -1,0 +1,145 @@
+"""``make dune-relay``: DUNE against DUNE through the relay, inside a private network namespace it creates (as
+``make dune-conformance`` does): lauv-simulator-1 as the vehicle and a second DUNE, lauv-xplore-2 with its UDP
+transport on, as the console. Neither announces itself (an Announce on loopback would tell each the other's own
+address, and their traffic would bypass the relay): each sends its UDP transport's messages to a static destination,
+the relay's socket facing it, and takes what comes without the contact filter (``Ignore Filter``). The relay judges
+both sides over a clean link, then over an impaired one; ``reports/dune-relay-<link>.{json,html,pcapng}``. Never in CI.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+
+from .build import built, home, source
+from .conformance import INSIDE, _in_namespace, _isolate
+from .world import CONFIG_DIR, VEHICLE, dune_argv, forget_state, iridium_gateway, leftovers, start, stop, write_configs
+
+CONSOLE = "lauv-xplore-2"
+VEHICLE_PORT, CONSOLE_PORT, LISTEN, VIA = 6002, 6003, 6010, 6011
+STARTUP = 5.0  # seconds DUNE takes to start its transports before the relay listens
+
+NOT_ANNOUNCED = """
+[Transports.Announce]
+Enabled = Never
+
+[Transports.Discovery]
+Enabled = Never
+"""
+
+VEHICLE_INI = """\
+# Written by imc-conformance (make dune-relay): DUNE's lauv-simulator-1 as the vehicle, its UDP transport sending only
+# to the relay, announcing nothing.
+[Require ../lauv-simulator-1.ini]
+[Require shared.ini]
+{quiet}
+[Transports.UDP]
+Local Port = {port}
+Static Destinations = 127.0.0.1:{to}
+Ignore Filter = true
+
+[Simulators.Iridium]
+Enabled = Never
+"""
+
+CONSOLE_INI = """\
+# Written by imc-conformance (make dune-relay): lauv-xplore-2 as the console, its UDP transport sending only to the
+# relay, announcing nothing, with no other IP transport (its ports would collide with the vehicle's).
+[Require ../lauv-simulator-1.ini]
+[Require shared.ini]
+
+[General]
+Vehicle = {name}
+
+[Simulators.GPS]
+Initial Position = 41.1859, -8.7062
+{quiet}{disabled}
+[Transports.UDP]
+Local Port = {port}
+Static Destinations = 127.0.0.1:{to}
+Ignore Filter = true
+
+[Simulators.Iridium]
+Enabled = Never
+"""
+
+CONSOLE_WITHOUT = ("Transports.HTTP", "Transports.FTP", "Transports.TCP.Server/SlaveCPU", "Transports.TCP.Server/BackSeat",
+                   "Transports.TCPOnDemand")
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="make dune-relay", description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=60.0, help="how long each link is relayed (default 60)")
+    parser.add_argument("--impair", default="loss=0.3,delay=2", help="the impaired link (default loss=0.3,delay=2)")
+    parser.add_argument("--seed", type=int, default=1, help="the impairment's seed (default 1)")
+    parser.add_argument("--reports", type=Path, default=Path("reports"), help="where to write the reports")
+    args = parser.parse_args(argv)
+    if not built():
+        print("make dune-relay: DUNE is not built here: run `make dune` first", file=sys.stderr)
+        return 2
+    if os.environ.get(INSIDE) != "1":
+        return _in_namespace(argv, "relay")
+    signal.signal(signal.SIGTERM, _interrupted)
+    problem = _isolate()
+    if problem:
+        print(f"make dune-relay: {problem}", file=sys.stderr)
+        return 2
+    args.reports.mkdir(parents=True, exist_ok=True)
+    codes = {}
+    try:
+        for name, spec in (("clean", ""), ("impaired", args.impair)):
+            codes[name] = _pair(args, name, spec)
+    except KeyboardInterrupt:
+        print("make dune-relay: interrupted", file=sys.stderr)
+        return 130
+    for name in codes:
+        result = json.loads((args.reports / f"dune-relay-{name}.json").read_text())
+        counts: dict[str, int] = {}
+        for message in result["messages"]:
+            for case in message["cases"]:
+                counts[case["verdict"]] = counts.get(case["verdict"], 0) + 1
+        print(f"dune-relay {name}: exit {codes[name]}; " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))
+    return 0 if all(code in (0, 1) for code in codes.values()) else 2
+
+
+def _interrupted(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _pair(args, name: str, spec: str) -> int:
+    """The two DUNEs started afresh, relayed for ``--seconds`` over the link ``spec``, stopped; the relay's exit code."""
+    from ....cli import main as cli
+
+    for pid in leftovers():
+        os.kill(pid, signal.SIGKILL)
+    run = home() / "run-relay"
+    run.mkdir(parents=True, exist_ok=True)
+    write_configs()
+    folder = source() / "etc" / CONFIG_DIR
+    disabled = "".join(f"\n[{task}]\nEnabled = Never\n" for task in CONSOLE_WITHOUT)
+    (folder / "relay-vehicle.ini").write_text(VEHICLE_INI.format(quiet=NOT_ANNOUNCED, port=VEHICLE_PORT, to=VIA))
+    (folder / "relay-console.ini").write_text(CONSOLE_INI.format(name=CONSOLE, quiet=NOT_ANNOUNCED, disabled=disabled,
+                                                                 port=CONSOLE_PORT, to=LISTEN))
+    for system in (VEHICLE, CONSOLE):
+        forget_state(system)
+    gateway = iridium_gateway()
+    start(run, "vehicle", dune_argv("relay-vehicle"))
+    start(run, "console", dune_argv("relay-console"))
+    try:
+        time.sleep(STARTUP)
+        out = args.reports / f"dune-relay-{name}"
+        return cli(["relay", f"udp://127.0.0.1:{LISTEN}", "--vehicle", f"udp://127.0.0.1:{VEHICLE_PORT}",
+                    "--via", f"127.0.0.1:{VIA}", "--impair", spec, "--seed", str(args.seed), "--duration",
+                    str(args.seconds), "--pcap", f"{out}.pcapng", "--json", f"{out}.json", "--html", f"{out}.html"])
+    finally:
+        for process in ("console", "vehicle"):
+            stop(run, process)
+        gateway.shutdown()
+        left = leftovers()
+        for pid in left:
+            os.kill(pid, signal.SIGKILL)
