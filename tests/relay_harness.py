@@ -98,14 +98,14 @@ def judge() -> CaptureJudge:
 
 
 def simulate(seconds: float, impair: dict | None = None, seed: int = 0, console: Console | None = None,
-             broken: str | None = None, log: list | None = None):
+             broken: str | None = None, log: list | None = None, record=None):
     """Run a console and a reference node through the relay for ``seconds`` of virtual time; the relay, the
     console and the merged result. ``log`` collects (time, side, 'sent' or 'received', data, delivered intact)."""
     impair = impair or {}
     console = console or Console()
     links = {side: Link(impair.get(side, Impairment()), seed, side) for side in SIDES}
     relay = Relay({side: judge() for side in SIDES}, links, FACING, {"console": None, "vehicle": VEHICLE},
-                  **SUITE.relay_hooks())
+                  record=record, **SUITE.relay_hooks())
     node = ReferenceNode(SUITE.defs, SUITE.behaviour, edition=SUITE.editions[0], address=VEHICLE, broken=broken,
                          epoch0=EPOCH)
     t = 0.0

@@ -76,6 +76,22 @@ def test_a_vehicle_answering_the_wrong_requester_is_caught(impair):
     assert "imc/AcousticSystemsQuery/relay/vehicle/exchange/acoustic-systems/answered" in failed
 
 
+def test_the_recording_holds_what_each_side_sent_and_received(tmp_path):
+    from imc_conformance.capture.recording import Recorder
+    from imc_conformance.capture.records import records
+
+    recorder = Recorder(tmp_path / "relay.pcapng", {"impairment": "loss"}, prefix="imc-conformance relay ")
+    relay, _, _ = simulate(30, {side: Impairment(loss=0.3, duplicate=0.2) for side in SIDES}, record=recorder.record)
+    recorder.close(complete=False)
+    sections: list[str] = []
+    comments = Counter(r.comment.split(" (")[0] for r in records((tmp_path / "relay.pcapng").read_bytes(), sections))
+    assert sections == ['imc-conformance relay {"impairment": "loss"}']
+    for side in SIDES:
+        other = "vehicle" if side == "console" else "console"
+        assert comments[f"{side} sent"] == relay.counts[side]["sent"]
+        assert comments[f"{other} received"] == relay.counts[side]["delivered"] > relay.counts[side]["sent"] * 0.7
+
+
 def test_the_link_is_reproducible_from_its_seed():
     spec = parse("loss=0.2,burst=3,delay=0.5,jitter=0.2,distribution=normal,duplicate=0.1,reorder=0.1,corrupt=0.1,"
                  "rate=9600,down=5-6")

@@ -76,7 +76,7 @@ def command(args) -> int:
     from ..relay.core import SIDES, Relay, merged
     from ..relay.impairment import Link
     from ..render.terminal import print_result
-    from ..sessions.udp import bound_socket
+    from ..sessions.udp import bound_socket, url
     from .output import report_targets, terminal, write_reports
     from .pcap import capture_rules
     from .provenance import provenance
@@ -125,7 +125,7 @@ def command(args) -> int:
                   **suite.relay_hooks())
     console = terminal()
     shown = f"udp://{args.listen.split('://')[-1]}"
-    print(f"imc-conformance: relaying {shown} <-> {args.vehicle} (via {facing['vehicle'][0]}:{facing['vehicle'][1]})"
+    print(f"imc-conformance: relaying {shown} <-> {args.vehicle} (via {url(*facing['vehicle'])})"
           f"{'' if all(i.none for i in links_given.values()) else ' through an impaired link'} (Ctrl-C to stop)",
           file=sys.stderr, flush=True)
     started = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")

@@ -76,9 +76,9 @@ class Relay:
             return
         for when, copy, note in fate.copies:
             heapq.heappush(self.queue, (when, next(self.order), to, copy, note, sent, frame))
-            if note:
-                for what in note.split(", "):
-                    self.counts[side][what.split(" ")[0] if what.startswith(("held", "byte")) else what] += 1
+            for what in filter(None, note.split(", ")):
+                self.counts[side]["held back" if what.startswith("held") else "with a byte changed"
+                                  if what.startswith("byte") else what] += 1
 
     def due(self, t: float) -> list[tuple[str, bytes]]:
         """The datagrams to deliver by ``t``: (the side they go to, their bytes)."""
@@ -136,8 +136,11 @@ class Relay:
     def notes(self) -> list[str]:
         """What each direction carried and what befell it, and the systems each side spoke as."""
         out = []
+        on_the_way = Counter(OTHER[entry[2]] for entry in self.queue)
         for side in SIDES:
             counts = self.counts[side]
+            if on_the_way[side]:
+                counts["still on the way when the relay stopped"] = on_the_way[side]
             befell = ", ".join(f"{n} {what}" for what, n in sorted(counts.items()) if what not in ("sent", "delivered"))
             systems = ", ".join(f"{s:#06x}" for s in sorted(self.systems[side])) or "none seen"
             out.append(f"{side} to {OTHER[side]}: {counts['sent']} datagrams sent, {counts['delivered']} delivered"
