@@ -24,9 +24,16 @@ def verdicts(result, side: str) -> dict[str, Verdict]:
     return {c.id.replace(marker, "/capture/"): c.verdict for c in result.cases if marker in c.id}
 
 
-def test_a_clean_relay_judges_each_side_as_watch_judges_the_traffic():
+def test_a_clean_relay_judges_each_side_as_watch_judges_the_traffic(tmp_path):
+    """Each side's verdicts equal those of a watcher of the conversation, and those ``pcap`` gives on the relay's own
+    recording."""
+    from imc_conformance.capture.recording import Recorder
+    from imc_conformance.capture.records import records
+
     log: list = []
-    _, console, result = simulate(90, log=log)
+    recorder = Recorder(tmp_path / "relay.pcapng", {}, prefix="imc-conformance relay ")
+    _, console, result = simulate(90, log=log, record=recorder.record)
+    recorder.close(complete=False)
     assert console.answered > 20
     watch = judge()  # what watch judges of the conversation: every datagram each side sent, as it was sent
     for number, (t, side, what, data, _) in enumerate(log, 1):
@@ -36,6 +43,11 @@ def test_a_clean_relay_judges_each_side_as_watch_judges_the_traffic():
     watched = watch.result(implementation="watch", started="", duration=0.0, strict=False, title="", until=90)
     expected = {c.id: c.verdict for c in watched.cases}
     assert any("/exchange/" in case for case in expected) and set(expected.values()) == {Verdict.PASS}
+    recorded = judge()
+    for record in records((tmp_path / "relay.pcapng").read_bytes()):
+        recorded.feed(record)
+    replayed = recorded.result(implementation="pcap", started="", duration=0.0, strict=False, title="", until=90)
+    assert {c.id: c.verdict for c in replayed.cases} == expected
     for side in SIDES:
         assert verdicts(result, side) == expected
 
