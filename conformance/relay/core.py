@@ -18,7 +18,6 @@ from .resend import ResendWatch
 
 SIDES = ("console", "vehicle")
 OTHER = {"console": "vehicle", "vehicle": "console"}
-ANYONE = (0, 0xFFFF)  # destinations naming no system in particular (IMC's 0xFFFF; 0, as DUNE addresses Announce)
 
 
 class Relay:
@@ -107,7 +106,9 @@ class Relay:
         judged, in each side's view, for the systems whose requests they are."""
         to, t = OTHER[side], sent.time
         src = {frame.src} if frame is not None and frame.src is not None else set(self.systems[side]) or None
-        dst = ({frame.dst} if frame is not None and frame.dst is not None and frame.dst not in ANYONE
+        tracker = self.judges[to].tracker  # a destination naming no system in particular stands for all of them
+        anyone = (getattr(tracker, "anyone", None), getattr(tracker, "nobody", None))
+        dst = ({frame.dst} if frame is not None and frame.dst is not None and frame.dst not in anyone
                else set(self.systems[to]) or None)
         why = f"the relay did not deliver a datagram from the {side} ({why})"
         self.judges[side].tracker.lost(t, until or t, why, None if src is None else frozenset(src))

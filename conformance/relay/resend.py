@@ -11,6 +11,7 @@ from ..core.verdicts import Verdict
 from ..kinds.scenario.matchers import hashable
 
 CASE = "request/resend-after-loss"
+JUDGED_LIMIT = 1 << 16
 
 
 class ResendWatch:
@@ -19,7 +20,8 @@ class ResendWatch:
     def __init__(self, by_request: dict, ambiguity: tuple[str, str]):
         self.by_request, (self.ambiguity, self.clause) = by_request, ambiguity
         self.pending: dict[tuple, tuple[float, str, Datagram]] = {}  # key -> (deadline, group, the datagram lost)
-        self.judged: set[tuple] = set()  # requests judged once (a resend lost again is not judged again)
+        self.judged: dict[tuple, None] = {}  # requests judged once (a resend lost again is not judged again), the
+        # latest JUDGED_LIMIT of them
 
     def _key(self, group: str, frame) -> tuple | None:
         if frame is None or frame.fields is None:
@@ -42,17 +44,22 @@ class ResendWatch:
         found = self._key(group, frame)
         if found is not None and found[0] in self.pending:
             _, group, lost = self.pending.pop(found[0])
-            self.judged.add(found[0])
+            self._judged(found[0])
             out.append(Finding(group, f"{CASE}/{found[0][0]}", Verdict.PASS, self.clause,
                                f"resent {sent.time - lost.time:.3f} s after the relay lost it (frame {lost.number})",
                                sent.number, sent.time, None, sent))
         return out
 
+    def _judged(self, key: tuple) -> None:
+        self.judged[key] = None
+        if len(self.judged) > JUDGED_LIMIT:
+            del self.judged[next(iter(self.judged))]
+
     def expire(self, t: float) -> list[Finding]:
         out = []
         for key in [k for k, (deadline, _, _) in self.pending.items() if deadline <= t]:
             deadline, group, lost = self.pending.pop(key)
-            self.judged.add(key)
+            self._judged(key)
             out.append(Finding(group, f"{CASE}/{key[0]}", Verdict.IMPL_DEFINED, self.clause,
                                f"the relay lost this request; its requester did not send it again within "
                                f"{deadline - lost.time:g} s (open reading {self.ambiguity})", lost.number, lost.time,
