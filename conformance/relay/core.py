@@ -87,6 +87,7 @@ class Relay:
             relay, endpoint = self.facing[to], self.endpoints[to]
             if endpoint is None:  # the console has not spoken yet: nowhere to send
                 self.counts[OTHER[to]]["undeliverable (the console had not spoken yet)"] += 1
+                self._undelivered(sent, OTHER[to], frame, "the console had not spoken yet", until=when)
                 continue
             self.counts[OTHER[to]]["delivered"] += 1
             if self.record:
