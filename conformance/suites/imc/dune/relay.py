@@ -18,7 +18,7 @@ from pathlib import Path
 
 from .build import built, home, source
 from .conformance import INSIDE, _in_namespace, _isolate
-from .world import CONFIG_DIR, VEHICLE, dune_argv, forget_state, iridium_gateway, leftovers, start, stop, write_configs
+from .world import CONFIG_DIR, VEHICLE, dune_argv, forget_state, leftovers, start, stop, write_configs
 
 CONSOLE = "lauv-xplore-2"
 VEHICLE_PORT, CONSOLE_PORT, LISTEN, VIA = 6002, 6003, 6010, 6011
@@ -127,7 +127,6 @@ def _pair(args, name: str, spec: str) -> int:
                                                                  port=CONSOLE_PORT, to=LISTEN))
     for system in (VEHICLE, CONSOLE):
         forget_state(system)
-    gateway = iridium_gateway()
     start(run, "vehicle", dune_argv("relay-vehicle"))
     start(run, "console", dune_argv("relay-console"))
     try:
@@ -139,7 +138,6 @@ def _pair(args, name: str, spec: str) -> int:
     finally:
         for process in ("console", "vehicle"):
             stop(run, process)
-        gateway.shutdown()
         left = leftovers()
         for pid in left:
             os.kill(pid, signal.SIGKILL)
