@@ -115,8 +115,10 @@ def _pair(args, name: str, spec: str) -> int:
     """The two DUNEs started afresh, relayed for ``--seconds`` over the link ``spec``, stopped; the relay's exit code."""
     from ....cli import main as cli
 
-    for pid in leftovers():
-        os.kill(pid, signal.SIGKILL)
+    running = leftovers()
+    if running:  # another run's DUNE: never stopped from here
+        raise SystemExit(f"make dune-relay: DUNE is already running (processes {', '.join(map(str, running))}): "
+                         "wait for that run to end")
     run = home() / "run-relay"
     run.mkdir(parents=True, exist_ok=True)
     write_configs()
@@ -138,6 +140,3 @@ def _pair(args, name: str, spec: str) -> int:
     finally:
         for process in ("console", "vehicle"):
             stop(run, process)
-        left = leftovers()
-        for pid in left:
-            os.kill(pid, signal.SIGKILL)
