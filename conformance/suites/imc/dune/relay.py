@@ -2,7 +2,8 @@
 ``make dune-conformance`` does): lauv-simulator-1 as the vehicle and a second DUNE, lauv-xplore-2 with its UDP
 transport on, as the console. Neither announces itself (an Announce on loopback would tell each the other's own
 address, and their traffic would bypass the relay): each sends its UDP transport's messages to a static destination,
-the relay's socket facing it, and takes what comes without the contact filter (``Ignore Filter``). The relay judges
+the relay's socket facing it, and takes what comes without the contact filter (``Ignore Filter``); each sends only its
+own system's messages (``Local Messages Only``: else each would send the other's back, and they would circle). The relay judges
 both sides over a clean link, then over an impaired one; ``reports/dune-relay-<link>.{json,html,pcapng}``. Never in CI.
 """
 
@@ -42,6 +43,7 @@ VEHICLE_INI = """\
 Local Port = {port}
 Static Destinations = 127.0.0.1:{to}
 Ignore Filter = true
+Local Messages Only = true
 
 [Simulators.Iridium]
 Enabled = Never
@@ -63,6 +65,7 @@ Initial Position = 41.1859, -8.7062
 Local Port = {port}
 Static Destinations = 127.0.0.1:{to}
 Ignore Filter = true
+Local Messages Only = true
 
 [Simulators.Iridium]
 Enabled = Never
