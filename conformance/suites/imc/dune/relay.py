@@ -1,6 +1,7 @@
 """``make dune-relay``: DUNE against DUNE through the relay, inside a private network namespace it creates (as
-``make dune-conformance`` does): lauv-simulator-1 as the vehicle and a second DUNE, lauv-xplore-2 with its UDP
-transport on, as the console. Neither announces itself (an Announce on loopback would tell each the other's own
+``make dune-conformance`` does): DUNE's lauv-simulator-1 configuration as two systems of their own, lauv-xplore-3 the
+vehicle and lauv-xplore-2 the console (their state and logs apart from the other DUNE scripts' systems, so both can run
+at once). Neither announces itself (an Announce on loopback would tell each the other's own
 address, and their traffic would bypass the relay): each sends its UDP transport's messages to a static destination,
 the relay's socket facing it, and takes what comes without the contact filter (``Ignore Filter``); each sends only its
 own system's messages (``Local Messages Only``: else each would send the other's back, and they would circle). The relay judges
@@ -19,9 +20,9 @@ from pathlib import Path
 
 from .build import built, home, source
 from .conformance import INSIDE, _in_namespace, _isolate
-from .world import CONFIG_DIR, VEHICLE, dune_argv, forget_state, leftovers, start, stop, write_configs
+from .world import CONFIG_DIR, dune_argv, forget_state, start, stop
 
-CONSOLE = "lauv-xplore-2"
+VEHICLE, CONSOLE = "lauv-xplore-3", "lauv-xplore-2"
 VEHICLE_PORT, CONSOLE_PORT, LISTEN, VIA = 6002, 6003, 6010, 6011
 STARTUP = 5.0  # seconds DUNE takes to start its transports before the relay listens
 
@@ -34,10 +35,12 @@ Enabled = Never
 """
 
 VEHICLE_INI = """\
-# Written by imc-conformance (make dune-relay): DUNE's lauv-simulator-1 as the vehicle, its UDP transport sending only
-# to the relay, announcing nothing.
+# Written by imc-conformance (make dune-relay): DUNE's lauv-simulator-1 configuration as the vehicle, its UDP transport
+# sending only to the relay, announcing nothing.
 [Require ../lauv-simulator-1.ini]
-[Require shared.ini]
+
+[General]
+Vehicle = {name}
 {quiet}
 [Transports.UDP]
 Local Port = {port}
@@ -53,7 +56,6 @@ CONSOLE_INI = """\
 # Written by imc-conformance (make dune-relay): lauv-xplore-2 as the console, its UDP transport sending only to the
 # relay, announcing nothing, with no other IP transport (its ports would collide with the vehicle's).
 [Require ../lauv-simulator-1.ini]
-[Require shared.ini]
 
 [General]
 Vehicle = {name}
@@ -118,16 +120,13 @@ def _pair(args, name: str, spec: str) -> int:
     """The two DUNEs started afresh, relayed for ``--seconds`` over the link ``spec``, stopped; the relay's exit code."""
     from ....cli import main as cli
 
-    running = leftovers()
-    if running:  # another run's DUNE: never stopped from here
-        raise SystemExit(f"make dune-relay: DUNE is already running (processes {', '.join(map(str, running))}): "
-                         "wait for that run to end")
     run = home() / "run-relay"
     run.mkdir(parents=True, exist_ok=True)
-    write_configs()
     folder = source() / "etc" / CONFIG_DIR
+    folder.mkdir(parents=True, exist_ok=True)
     disabled = "".join(f"\n[{task}]\nEnabled = Never\n" for task in CONSOLE_WITHOUT)
-    (folder / "relay-vehicle.ini").write_text(VEHICLE_INI.format(quiet=NOT_ANNOUNCED, port=VEHICLE_PORT, to=VIA))
+    (folder / "relay-vehicle.ini").write_text(VEHICLE_INI.format(name=VEHICLE, quiet=NOT_ANNOUNCED, port=VEHICLE_PORT,
+                                                                 to=VIA))
     (folder / "relay-console.ini").write_text(CONSOLE_INI.format(name=CONSOLE, quiet=NOT_ANNOUNCED, disabled=disabled,
                                                                  port=CONSOLE_PORT, to=LISTEN))
     for system in (VEHICLE, CONSOLE):
