@@ -5,7 +5,8 @@ at once). Neither announces itself (an Announce on loopback would tell each the 
 address, and their traffic would bypass the relay): each sends its UDP transport's messages to a static destination,
 the relay's socket facing it, and takes what comes without the contact filter (``Ignore Filter``); each sends only its
 own system's messages (``Local Messages Only``: else each would send the other's back, and they would circle). The relay judges
-both sides over a clean link, then over an impaired one; ``reports/dune-relay-<link>.{json,html,pcapng}``. Never in CI.
+both sides with the whole protocol (``--suite imc-full``: DUNE's traffic is mostly messages outside the suite's) over a
+clean link, then over an impaired one; ``reports/dune-relay-<link>.{json,html,pcapng}``. Never in CI.
 """
 
 from __future__ import annotations
@@ -138,7 +139,7 @@ def _pair(args, name: str, spec: str) -> int:
         out = args.reports / f"dune-relay-{name}"
         return cli(["relay", f"udp://127.0.0.1:{LISTEN}", "--vehicle", f"udp://127.0.0.1:{VEHICLE_PORT}",
                     "--via", f"127.0.0.1:{VIA}", "--impair", spec, "--seed", str(args.seed), "--duration",
-                    str(args.seconds), "--pcap", f"{out}.pcapng", "--json", f"{out}.json", "--html", f"{out}.html"])
+                    str(args.seconds), "--pcap", f"{out}.pcapng", "--json", f"{out}.json", "--html", f"{out}.html", "--suite", "imc-full"])
     finally:
         for process in ("console", "vehicle"):
             stop(run, process)
