@@ -21,7 +21,7 @@ from pathlib import Path
 
 from .build import built, home, source
 from .conformance import INSIDE, _in_namespace, _isolate
-from .world import CONFIG_DIR, dune_argv, forget_state, start, stop
+from .world import CONFIG_DIR, UDP_MESSAGES, dune_argv, forget_state, start, stop
 
 VEHICLE, CONSOLE = "lauv-xplore-3", "lauv-xplore-2"
 VEHICLE_PORT, CONSOLE_PORT, LISTEN, VIA = 6002, 6003, 6010, 6011
@@ -48,9 +48,14 @@ Local Port = {port}
 Static Destinations = 127.0.0.1:{to}
 Ignore Filter = true
 Local Messages Only = true
+{transports}
 
 [Simulators.Iridium]
 Enabled = Never
+
+[Transports.DataStore]
+Enabled = Always
+Entity Label = DataStore Transport
 """
 
 CONSOLE_INI = """\
@@ -84,6 +89,9 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--impair", default="loss=0.3,delay=2", help="the impaired link (default loss=0.3,delay=2)")
     parser.add_argument("--seed", type=int, default=1, help="the impairment's seed (default 1)")
     parser.add_argument("--reports", type=Path, default=Path("reports"), help="where to write the reports")
+    parser.add_argument("--console", choices=("dune", "session", "both"), default="both",
+                        help="the console: a second DUNE, the suite's own session (its HistoricDataQuery scenarios), "
+                             "or both in turn (default)")
     args = parser.parse_args(argv)
     if not built():
         print("make dune-relay: DUNE is not built here: run `make dune` first", file=sys.stderr)
@@ -98,8 +106,10 @@ def main(argv: list[str]) -> int:
     args.reports.mkdir(parents=True, exist_ok=True)
     codes = {}
     try:
-        for name, spec in (("clean", ""), ("impaired", args.impair)):
-            codes[name] = _pair(args, name, spec)
+        for session in {"dune": (False,), "session": (True,), "both": (False, True)}[args.console]:
+            for name, spec in (("clean", ""), ("impaired", args.impair)):
+                name = f"session-{name}" if session else name
+                codes[name] = _pair(args, name, spec, session)
     except KeyboardInterrupt:
         print("make dune-relay: interrupted", file=sys.stderr)
         return 130
@@ -117,8 +127,12 @@ def _interrupted(signum, frame):
     raise KeyboardInterrupt
 
 
-def _pair(args, name: str, spec: str) -> int:
-    """The two DUNEs started afresh, relayed for ``--seconds`` over the link ``spec``, stopped; the relay's exit code."""
+def _pair(args, name: str, spec: str, session: bool = False) -> int:
+    """The DUNEs started afresh, relayed for ``--seconds`` over the link ``spec``, stopped; the relay's exit code.
+    ``session``: the suite's own session is the console (the HistoricDataQuery scenarios, which DUNE's DataStore
+    answers), not a second DUNE; the vehicle then sends the replies the scenarios wait for."""
+    import subprocess
+
     from ....cli import main as cli
 
     run = home() / "run-relay"
@@ -126,20 +140,33 @@ def _pair(args, name: str, spec: str) -> int:
     folder = source() / "etc" / CONFIG_DIR
     folder.mkdir(parents=True, exist_ok=True)
     disabled = "".join(f"\n[{task}]\nEnabled = Never\n" for task in CONSOLE_WITHOUT)
+    transports = f"Transports = {', '.join(UDP_MESSAGES)}" if session else ""
     (folder / "relay-vehicle.ini").write_text(VEHICLE_INI.format(name=VEHICLE, quiet=NOT_ANNOUNCED, port=VEHICLE_PORT,
-                                                                 to=VIA))
+                                                                 to=VIA, transports=transports))
     (folder / "relay-console.ini").write_text(CONSOLE_INI.format(name=CONSOLE, quiet=NOT_ANNOUNCED, disabled=disabled,
                                                                  port=CONSOLE_PORT, to=LISTEN))
+    processes = ("vehicle",) if session else ("vehicle", "console")
     for system in (VEHICLE, CONSOLE):
         forget_state(system)
-    start(run, "vehicle", dune_argv("relay-vehicle"))
-    start(run, "console", dune_argv("relay-console"))
+    for process in processes:
+        start(run, process, dune_argv(f"relay-{process}"))
+    out = args.reports / f"dune-relay-{name}"
+    relay = ["relay", f"udp://127.0.0.1:{LISTEN}", "--vehicle", f"udp://127.0.0.1:{VEHICLE_PORT}", "--via",
+             f"127.0.0.1:{VIA}", "--impair", spec, "--seed", str(args.seed), "--pcap", f"{out}.pcapng", "--json",
+             f"{out}.json", "--html", f"{out}.html", "--suite", "imc-full"]
     try:
         time.sleep(STARTUP)
-        out = args.reports / f"dune-relay-{name}"
-        return cli(["relay", f"udp://127.0.0.1:{LISTEN}", "--vehicle", f"udp://127.0.0.1:{VEHICLE_PORT}",
-                    "--via", f"127.0.0.1:{VIA}", "--impair", spec, "--seed", str(args.seed), "--duration",
-                    str(args.seconds), "--pcap", f"{out}.pcapng", "--json", f"{out}.json", "--html", f"{out}.html", "--suite", "imc-full"])
+        if not session:
+            return cli([*relay, "--duration", str(args.seconds)])
+        relaying = subprocess.Popen([str(Path(sys.executable).parent / "imc-conformance"), *relay, "--duration", "1800"])
+        try:
+            time.sleep(2.0)
+            cli(["run", "--no-progress", "--target", f"udp://127.0.0.1:{LISTEN}", "--startup", "40", "--message",
+                 "HistoricDataQuery", "--json", f"{out}-console.json"])
+        finally:
+            relaying.send_signal(signal.SIGTERM)
+            code = relaying.wait(120)
+        return code
     finally:
-        for process in ("console", "vehicle"):
+        for process in processes:
             stop(run, process)
