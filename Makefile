@@ -74,7 +74,7 @@ relay: $(VENV)/.installed
 	  sleep 2; $(VENV)/bin/imc-conformance run --target udp://127.0.0.1:26010 $(RELAY_RUN) \
 	    --json reports/relay-$$name-console.json > /dev/null; \
 	  sleep 3; kill -TERM $$relay; wait $$relay; kill -TERM $$vehicle; wait $$vehicle; \
-	  tail -n 1 reports/relay-$$name.txt; done
+	  grep "cases in" reports/relay-$$name.txt; done
 
 # DUNE (LSTS's IMC node) as a live target: built once from the imcpy sdist into the cache (10-30 min on 2 cores),
 # then the scenario set against it inside a private network namespace (needs root for unshare --net), then live
