@@ -10,7 +10,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	touch $@
 
-.PHONY: conformance test docs reference dist screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters
+.PHONY: conformance test docs reference dist screenshot generate benchmark dune dune-conformance dune-record matrix mutants cpp-adapters relay dune-relay
 conformance: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter imcpy --json reports/imcpy.json --html reports/imcpy.html
 
@@ -72,6 +72,22 @@ cpp-adapters: $(VENV)/.installed
 	$(VENV)/bin/imc-conformance run --adapter dune-cpp --json reports/dune-cpp.json
 	$(VENV)/bin/imc-conformance run --suite ros_acomms --adapter roscpp --json reports/roscpp.json; test $$? -le 1
 
+# Two implementations judged through the relay on loopback: the reference node (serve) as the vehicle, the suite's own
+# session (run, the scenarios of three queries) as the console; over a clean link, then over one losing 30% of the
+# datagrams each way with a 2 s delay (seed 1). The relay's reports: reports/relay-clean.* and reports/relay-lossy.*.
+RELAY_RUN = --message AcousticSystemsQuery --message LblConfig --message HistoricDataQuery --no-progress
+relay: $(VENV)/.installed
+	mkdir -p reports
+	for link in clean: lossy:loss=0.3,delay=2; do name=$${link%%:*}; \
+	  $(VENV)/bin/imc-conformance serve --port 26002 2> reports/relay-$$name-vehicle.log & vehicle=$$!; \
+	  $(VENV)/bin/imc-conformance relay udp://127.0.0.1:26010 --vehicle udp://127.0.0.1:26002 --impair "$${link#*:}" \
+	    --seed 1 --duration 900 --pcap reports/relay-$$name.pcapng --json reports/relay-$$name.json \
+	    --html reports/relay-$$name.html > reports/relay-$$name.txt & relay=$$!; \
+	  sleep 2; $(VENV)/bin/imc-conformance run --target udp://127.0.0.1:26010 $(RELAY_RUN) \
+	    --json reports/relay-$$name-console.json > /dev/null; \
+	  sleep 3; kill -TERM $$relay; wait $$relay; kill -TERM $$vehicle; wait $$vehicle; \
+	  grep "cases in" reports/relay-$$name.txt; done
+
 # DUNE (LSTS's IMC node) as a live target: built once from the imcpy sdist into the cache (10-30 min on 2 cores),
 # then the scenario set against it inside a private network namespace (needs root for unshare --net), then live
 # fuzzing (40 mutated frames a message; --fuzz-budget N to change it). Never in CI.
@@ -80,6 +96,13 @@ dune: $(VENV)/.installed
 
 dune-conformance: dune
 	$(VENV)/bin/python -m imc_conformance.suites.imc.dune conformance
+
+# DUNE against DUNE through the relay in a private network namespace: DUNE's lauv-simulator-1 configuration as two
+# systems of their own (lauv-xplore-3 the vehicle, lauv-xplore-2 the console), a minute over a clean link and a minute
+# losing 30% of the datagrams each way with a 2 s delay; then the same two links with the suite's own session (its
+# HistoricDataQuery scenarios) as the console (reports/dune-relay-[session-]{clean,impaired}.*). Never in CI.
+dune-relay: dune
+	$(VENV)/bin/python -m imc_conformance.suites.imc.dune relay
 
 # DUNE's own traffic for a minute (every message lauv-simulator-1 transports), recorded in its namespace, then judged
 # message by message with the whole protocol; and the mission log DUNE wrote meanwhile, judged with the IMC.xml

@@ -7,15 +7,15 @@ from the bottom:
 - ``core``: the suite-generic core (results, runner, sessions and suites as contracts); it imports nothing else;
 - ``base``: what every layer above may use: bounds, errors, escaping, bounded reading, the cache, schema checks,
   the types of the command line's values, the adapter API, building native programs, the restart command;
-- ``capture``, ``kinds``, ``render``, ``sessions`` (with the live options), ``fuzz`` (and the adapter check): the
-  machinery, each only on those before it;
+- ``capture``, ``kinds``, ``relay``, ``render``, ``sessions`` (with the live options), ``fuzz`` (and the adapter
+  check): the machinery, each only on those before it;
 - ``suites``: each suite over that machinery (a suite imports no other suite);
 - ``tools``: what is built on a suite (the scapy layer, the adapters of real implementations);
 - ``files``: opening a suite's corpus, waivers and saved results;
 - ``commands``: the command line, one module per command;
 - ``programs``: the entry points nothing imports: the CLI, the pytest plugin, the benchmark, the hypothesis
   properties for pytest and HypoFuzz, the worker process of a library adapter, and the DUNE scripts of
-  ``make dune-conformance``.
+  ``make dune-conformance`` and ``make dune-relay``.
 
 A module belongs to the layer of the longest prefix that names it; a module no layer names fails the test, so a new
 package is placed on purpose.
@@ -33,6 +33,7 @@ LAYERS = [
               "native", "restart"]),
     ("capture", ["capture"]),
     ("kinds", ["kinds"]),
+    ("relay", ["relay"]),
     ("render", ["render"]),
     ("sessions", ["sessions", "live"]),
     ("fuzz", ["fuzz", "adaptercheck"]),
@@ -41,7 +42,7 @@ LAYERS = [
     ("files", ["files"]),
     ("commands", ["commands"]),
     ("programs", ["cli", "pytest_plugin", "benchmark", "fuzz.properties", "sessions.worker",
-                  "suites.imc.dune.conformance", "suites.imc.dune.__main__"]),
+                  "suites.imc.dune.conformance", "suites.imc.dune.relay", "suites.imc.dune.__main__"]),
 ]
 PACKAGE = "imc_conformance"
 

@@ -22,12 +22,13 @@ class Recorder:
     """Records a run; a recording that cannot be written (a full disk) stops, says why in ``failed``, and never
     stops the run."""
 
-    def __init__(self, path, about: dict):
+    def __init__(self, path, about: dict, prefix: str = ABOUT):
+        """``prefix``: what the section comment starts with (``ABOUT``: a run ``pcap`` can replay)."""
         self.path = path
         self.handle = open(path, "wb")  # noqa: SIM115 - open for the whole run, closed by close()
         self.count = 0
         self.failed: str | None = None
-        self._safely(lambda: setattr(self, "writer", PcapNgWriter(self.handle, ABOUT + json.dumps(about, sort_keys=True))))
+        self._safely(lambda: setattr(self, "writer", PcapNgWriter(self.handle, prefix + json.dumps(about, sort_keys=True))))
 
     def record(self, epoch: float, src: tuple, dst: tuple, data: bytes, comment: str) -> None:
         if self.failed is None and self._safely(lambda: self.writer.write(epoch, src, dst, bytes(data), comment)):

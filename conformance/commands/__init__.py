@@ -9,7 +9,7 @@ import importlib
 from ..suites import packages as suite_packages
 
 COMMANDS = {"run": "run", "list": "listing", "report": "report", "generate": "generate", "pcap": "pcap",
-            "log": "log", "watch": "watch", "fuzz": "fuzz", "mutants": "mutants",
+            "log": "log", "watch": "watch", "relay": "relay", "fuzz": "fuzz", "mutants": "mutants",
             "matrix": "matrix", "adapter-check": "adapter_check"}  # command -> its module, in the order --help lists them
 
 

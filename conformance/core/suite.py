@@ -129,6 +129,13 @@ class Suite(ABC):
         """What the suite judges in captures (``capture.findings.CaptureRules``); ValueError if it has none."""
         raise ValueError(f"the suite {self.name!r} is not carried in datagrams: it has no captures to judge")
 
+    def relay_hooks(self) -> dict:
+        """What the relay (``relay.core.Relay``) needs of the suite, as its keyword arguments: ``rewrite(data,
+        facing)``, a datagram changed so that replies come back through the relay; ``resend``, the (ambiguity, clause)
+        under which a requester's resending of a lost request is recorded; ``introductions``, the messages by which a
+        system makes itself known. None of them for a suite that needs none."""
+        return {}
+
     def log_reader(self, edition: str | None = None):
         """How the suite reads its mission logs (``capture.logs.LogReader``), judging in ``edition`` (None: the
         reader's choice); ValueError if it reads none."""

@@ -72,7 +72,7 @@ class PassiveExchanges:
         self.pairs: set[tuple] = set()  # (rule, requester, node) of every request seen
         self.senders: dict = {}  # system id -> the address and port its frames come from
         self.next_deadline = float("inf")
-        self.losses: list[tuple[float, float, str]] = []  # (from, to, why): times the frames do not tell all of
+        self.losses: list[tuple] = []  # (from, to, why, requesters or None): times the frames do not tell all of
 
     @property
     def messages(self) -> set[str]:
@@ -103,10 +103,11 @@ class PassiveExchanges:
         return any(_matches(w.fields, rule.reply_when) and (id(rule), w.dst, w.src) in self.pairs
                    for rule in self.by_reply.get(w.message, ()))
 
-    def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile") -> None:
+    def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> None:
         """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
-        a log's clock jumped): a request left unanswered across that time is not judged."""
-        self.losses.append((start, end, why))
+        a log's clock jumped, a relay dropped a datagram): a request left unanswered across that time is not judged
+        (``requesters``: only the requests of these systems; None: every request)."""
+        self.losses.append((start, end, why, requesters))
 
     def split(self, why: str) -> tuple[list[Finding], int]:
         """The frames' clock jumped (``why``): no bound can be timed across the jump, so every exchange still open is
@@ -261,7 +262,8 @@ class PassiveExchanges:
 
     def _judge_expired(self, o: _Open) -> list[Finding]:
         findings = self._expired(o)
-        why = next((why for start, end, why in self.losses if start <= o.deadline and end >= o.request.time), None)
+        why = next((why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
+                    and (systems is None or o.request.src in systems)), None)
         if why is not None:
             for f in findings:  # the reply, or the right one, may have been lost
                 if f.verdict in (Verdict.FAIL, Verdict.NON_STRICT):

@@ -183,6 +183,10 @@ class ImcSuite(DataSuite):
         defs = parse_definitions(xml_document(raw))
         return ImcSuite(IMC, defs, title=f"IMC {defs.editions[0][4:]} (the log's IMC.xml)")
 
+    def relay_hooks(self) -> dict:
+        from .relay import INTRODUCTIONS, RESEND, AnnounceRewriter
+        return {"rewrite": AnnounceRewriter(self.defs), "resend": RESEND, "introductions": INTRODUCTIONS}
+
     def log_reader(self, edition: str | None = None):
         from .lsf import LsfReader
         return LsfReader(self, edition)

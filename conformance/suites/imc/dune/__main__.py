@@ -1,4 +1,4 @@
-"""``python -m imc_conformance.suites.imc.dune build | conformance [...] | record [...] | restart --run DIR``."""
+"""``python -m imc_conformance.suites.imc.dune build | conformance [...] | record [...] | relay [...] | restart --run DIR``."""
 
 from __future__ import annotations
 
@@ -16,11 +16,14 @@ def main(argv: list[str]) -> int:
     if command == "record":
         from .conformance import record
         return record(rest)
+    if command == "relay":
+        from .relay import main as relay
+        return relay(rest)
     if command == "restart":
         from .conformance import restart_world
         return restart_world(rest)
     print("usage: python -m imc_conformance.suites.imc.dune build | conformance [--reports DIR] [--no-robustness] | "
-          "record [--seconds 120] [--out FILE] | restart --run DIR", file=sys.stderr)
+          "record [--seconds 120] [--out FILE] | relay [--seconds 60] [--impair SPEC] | restart --run DIR", file=sys.stderr)
     return 2
 
 

@@ -1,0 +1,177 @@
+"""The relay: its link model, its judging of both sides on virtual time (the reference node as the vehicle, the
+suite's peer logic as the console), and its refusals."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import pytest
+
+from imc_conformance.capture.datagrams import Datagram
+from imc_conformance.cli import main
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.relay.core import SIDES
+from imc_conformance.relay.impairment import Impairment, Link, parse
+from imc_conformance.suites.imc import codec
+from relay_harness import CONSOLE, FACING, SUITE, VEHICLE, Console, judge, simulate
+
+LOSSY = {side: Impairment(loss=0.3, delay=2.0) for side in SIDES}
+
+
+def verdicts(result, side: str) -> dict[str, Verdict]:
+    """A side's case verdicts by their id after ``relay/<side>/``."""
+    marker = f"/relay/{side}/"
+    return {c.id.replace(marker, "/capture/"): c.verdict for c in result.cases if marker in c.id}
+
+
+def test_a_clean_relay_judges_each_side_as_watch_judges_the_traffic(tmp_path):
+    """Each side's verdicts equal those of a watcher of the conversation, and those ``pcap`` gives on the relay's own
+    recording."""
+    from imc_conformance.capture.recording import Recorder
+    from imc_conformance.capture.records import records
+
+    log: list = []
+    recorder = Recorder(tmp_path / "relay.pcapng", {}, prefix="imc-conformance relay ")
+    _, console, result = simulate(90, log=log, record=recorder.record)
+    recorder.close(complete=False)
+    assert console.answered > 20
+    watch = judge()  # what watch judges of the conversation: every datagram each side sent, as it was sent
+    for number, (t, side, what, data, _) in enumerate(log, 1):
+        if what == "sent":
+            src, dst = (CONSOLE, FACING["console"]) if side == "console" else (VEHICLE, FACING["vehicle"])
+            watch.received(Datagram(number, t, src[0], src[1], dst[0], dst[1], data))
+    watched = watch.result(implementation="watch", started="", duration=0.0, strict=False, title="", until=90)
+    expected = {c.id: c.verdict for c in watched.cases}
+    assert any("/exchange/" in case for case in expected) and set(expected.values()) == {Verdict.PASS}
+    recorded = judge()
+    for record in records((tmp_path / "relay.pcapng").read_bytes()):
+        recorded.feed(record)
+    replayed = recorded.result(implementation="pcap", started="", duration=0.0, strict=False, title="", until=90)
+    assert {c.id: c.verdict for c in replayed.cases} == expected
+    for side in SIDES:
+        assert verdicts(result, side) == expected
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_correct_pair_gets_no_fail_under_30_percent_loss_and_2_s_delay(seed):
+    relay, console, result = simulate(180, LOSSY, seed=seed)
+    counts = Counter(c.verdict for c in result.cases)
+    assert counts[Verdict.FAIL] == 0, [c.id for c in result.cases if c.verdict is Verdict.FAIL]
+    assert all(relay.counts[side]["lost (loss)"] > 20 for side in SIDES)
+    vehicle = verdicts(result, "vehicle")
+    assert vehicle["imc/AcousticSystemsQuery/capture/exchange/acoustic-systems/to-requester"] is Verdict.PASS
+    resent = [c for c in result.cases if "/request/resend-after-loss/" in c.id]
+    assert resent and any(ch.verdict is Verdict.PASS for c in resent for ch in c.checks)
+
+
+def test_requests_lost_on_a_link_that_is_down_are_nobodys_failure():
+    down = {"console": Impairment(down=((20.0, 40.0),)), "vehicle": Impairment()}
+    relay, _, result = simulate(90, down)
+    assert relay.counts["console"]["the link was down"] > 10
+    assert not [c.id for c in result.cases if c.verdict is Verdict.FAIL]
+    assert not [c for c in result.cases if "/relay/vehicle/" in c.id and c.verdict is not Verdict.PASS]
+
+
+def test_a_console_that_never_resends_a_query_is_caught():
+    _, _, result = simulate(180, LOSSY, console=Console(tries=1))
+    resent = [c for c in result.cases if "/request/resend-after-loss/" in c.id]
+    assert resent and {c.verdict for c in resent} == {Verdict.IMPL_DEFINED}  # a reading the seeds leave open
+    assert all(ch.verdict is Verdict.IMPL_DEFINED for c in resent for ch in c.checks)
+    assert all(any("(open reading resend-after-loss)" in ch.detail for ch in c.checks) for c in resent)
+    assert not [c for c in result.cases if c.verdict is Verdict.FAIL]
+
+
+@pytest.mark.parametrize("impair", [{}, LOSSY], ids=["clean", "lossy"])
+def test_a_vehicle_answering_the_wrong_requester_is_caught(impair):
+    _, _, result = simulate(120, impair, broken="replies-to-first-client")
+    failed = {c.id for c in result.cases if c.verdict is Verdict.FAIL and "/relay/vehicle/" in c.id}
+    assert "imc/AcousticSystemsQuery/relay/vehicle/exchange/acoustic-systems/answered" in failed
+
+
+def test_the_recording_holds_what_each_side_sent_and_received(tmp_path):
+    from imc_conformance.capture.recording import Recorder
+    from imc_conformance.capture.records import records
+
+    recorder = Recorder(tmp_path / "relay.pcapng", {"impairment": "loss"}, prefix="imc-conformance relay ")
+    relay, _, _ = simulate(30, {side: Impairment(loss=0.3, duplicate=0.2) for side in SIDES}, record=recorder.record)
+    recorder.close(complete=False)
+    sections: list[str] = []
+    comments = Counter(r.comment.split(" (")[0] for r in records((tmp_path / "relay.pcapng").read_bytes(), sections))
+    assert sections == ['imc-conformance relay {"impairment": "loss"}']
+    for side in SIDES:
+        other = "vehicle" if side == "console" else "console"
+        assert comments[f"{side} sent"] == relay.counts[side]["sent"]
+        assert comments[f"{other} received"] == relay.counts[side]["delivered"] > relay.counts[side]["sent"] * 0.7
+
+
+def test_the_link_is_reproducible_from_its_seed():
+    spec = parse("loss=0.2,burst=3,delay=0.5,jitter=0.2,distribution=normal,duplicate=0.1,reorder=0.1,corrupt=0.1,"
+                 "rate=9600,down=5-6")
+
+    def fates(seed):
+        link = Link(spec, seed, "console")
+        return [(f.dropped, [(round(t, 9), d) for t, d, _ in f.copies]) for f in
+                (link.carry(i * 0.05, bytes(range(40))) for i in range(2000))]
+
+    assert fates(7) == fates(7) != fates(8)
+    kinds = Counter(f[0] or ("copies", len(f[1])) for f in fates(7))
+    assert kinds["the link was down"] == 20 and kinds[("copies", 2)] > 50 and kinds["lost (loss)"] > 200
+
+
+def test_the_link_does_what_each_setting_says():
+    data = bytes(range(100))
+    link = Link(Impairment(loss=0.3), 1, "x")
+    lost = sum(link.carry(i, data).dropped is not None for i in range(10000))
+    assert 2700 < lost < 3300
+    bursty = Link(Impairment(loss=0.3, burst=5), 1, "x")
+    runs, run = [], 0
+    for i in range(20000):
+        if bursty.carry(i, data).dropped:
+            run += 1
+        elif run:
+            runs, run = runs + [run], 0
+    assert 4 < sum(runs) / len(runs) < 6 and 0.25 < sum(runs) / 20000 < 0.35
+    corrupt = Link(Impairment(corrupt=0.5), 1, "x")
+    changed = [f.copies[0][1] for f in (corrupt.carry(i, data) for i in range(200)) if "byte" in f.copies[0][2]]
+    assert changed and all(sum(a != b for a, b in zip(c, data)) == 1 and len(c) == len(data) for c in changed)
+    capped = Link(Impairment(rate=8000), 1, "x")  # 1,000 bytes a second
+    assert [round(capped.carry(0.0, data).copies[0][0], 6) for _ in range(3)] == [0.1, 0.2, 0.3]
+    late = Link(Impairment(delay=2.0, jitter=1.0, distribution="exponential", reorder=0.5, hold=0.5), 1, "x")
+    times = [late.carry(0.0, data).copies[0][0] for _ in range(500)]
+    assert min(times) >= 2.0 and any(t > 3.0 for t in times)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("loss=1", "loss='1': a share in [0, 1)"), ("lose=0.1", "'lose=0.1': expected NAME=VALUE"),
+    ("burst=3", "burst needs a loss rate"), ("down=5-2", "START < END"), ("distribution=pareto", "one of uniform"),
+    ("delay=nan", "a number in [0, 1e6]")])
+def test_a_mistaken_impairment_is_one_line(text, message):
+    with pytest.raises(ValueError, match=None) as caught:
+        parse(text)
+    assert message in str(caught.value) and "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["udp://10.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6002"], "10.0.0.1 is not a loopback address"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://224.0.75.69:6002"], "224.0.75.69 is not a loopback address"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://255.255.255.255:6002"], "is not a loopback address"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6002", "--via", "0.0.0.0:0"], "0.0.0.0 is not a loopback"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6002", "--to-console", "corrupt=2"], "--to-console: corrupt"),
+])
+def test_the_relay_refuses_in_one_line(argv, message, capsys):
+    assert main(["relay", *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_an_announce_is_changed_to_name_the_relay_and_nothing_else_is():
+    rewrite = SUITE.relay_hooks()["rewrite"]
+    header = {"timestamp": 1.0, "src": 0x4C10, "src_ent": 0, "dst": 0, "dst_ent": 0}
+    announce = codec.encode(SUITE.defs, {"abbrev": "Announce", "header": header, "fields": {
+        "sys_name": "c", "sys_type": 0, "owner": 0xFFFF, "lat": 0.0, "lon": 0.0, "height": 0.0,
+        "services": "imc+udp://10.0.0.5:6001/;imc+info://0.0.0.0/version/5.4.30"}}, "be")
+    changed = codec.decode(SUITE.defs, rewrite(announce, ("127.0.0.1", 6011)))
+    assert changed["fields"]["services"] == "imc+udp://127.0.0.1:6011/;imc+info://0.0.0.0/version/5.4.30"
+    assert codec.byte_order_of(rewrite(announce, ("127.0.0.1", 6011))) == "be"
+    query = codec.encode(SUITE.defs, {"abbrev": "AcousticSystemsQuery", "header": header, "fields": {}})
+    assert rewrite(query, ("127.0.0.1", 6011)) is None and rewrite(b"\x54\xfe\x97", ("127.0.0.1", 1)) is None
