@@ -297,7 +297,7 @@ def test_an_lz4_chunk_without_its_package_is_one_line(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "lz4.frame", None)
     _, damage, _ = read(tmp_path / "b.bag")
     assert damage == ["b.bag: the chunk at byte 4,109 is lz4-compressed: reading it needs the lz4 package, which the "
-                      "ros extra installs (pip install 'imc-conformance[ros]'): the bag is read up to it"]
+                      "suite's ros extra installs: the bag is read up to it"]
 
 
 def test_a_bag_for_another_suite_is_one_line(tmp_path, capsys):

@@ -219,4 +219,5 @@ def test_a_built_in_adapter_without_its_extra_names_the_extra(name, module, monk
     code = main(["run", "--suite", "ros_acomms", "--adapter", name, "--message", "CST"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1, err
-    assert f"adapter '{name}' needs the 'ros' extra: pip install 'imc-conformance[ros]'" in err[0], err
+    assert f"adapter '{name}' needs the 'ros' extra, installed with the suite: pip install '.[ros]' in its checkout" \
+        in err[0], err

@@ -57,6 +57,22 @@ def test_last_failed_reruns_exactly_the_failing_cases_of_a_byte_run(tmp_path, ca
     assert main(["run", "--adapter", "pyimclsts", "--last-failed", str(first), "--message", "LblRange", "--no-progress",
                  "--json", str(again)]) == 1
     assert set(saved(again)) == {i for i in failed if i.split("/")[1] == "LblRange"}
+    # without an adapter named, the one that judged them (pyimclsts), not the suite's default (imcpy, which passes them)
+    assert main(["run", "--last-failed", str(first), "--no-progress", "--json", str(again)]) == 1
+    assert saved(again) == {i: before[i] for i in failed}
+    assert json.loads(again.read_text(encoding="utf-8"))["adapter"] == "pyimclsts"
+
+
+def test_last_failed_through_a_program_needs_the_program_again(tmp_path, capsys):
+    """A result judged through --adapter-cmd holds no way to start that program: one line asks for it."""
+    first = tmp_path / "first.json"
+    assert main(["run", "--adapter", "pyimclsts", "--message", "LblRange", "--no-progress", "--json", str(first)]) == 1
+    capsys.readouterr()
+    doc = json.loads(first.read_text(encoding="utf-8"))
+    first.write_text(json.dumps(doc | {"adapter": "java -jar adapter.jar"}), encoding="utf-8")
+    assert main(["run", "--last-failed", str(first), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "give the same --adapter-cmd, --adapter-socket or --target" in err[0], err
 
 
 def test_last_failed_reruns_exactly_the_cases_of_a_live_run_that_did_not_pass(tmp_path, broken_node, capsys):

@@ -56,8 +56,9 @@ def missing_extra(builtin, exc: ModuleNotFoundError) -> UsageError | None:
     """The one line naming the pip extra a built-in adapter needs, when a module of that extra is what is missing."""
     if builtin is None or not builtin.extra or (exc.name or "imc_conformance").startswith("imc_conformance"):
         return None
-    return UsageError(f"adapter {builtin.name!r} needs the {builtin.extra!r} extra: pip install "
-                      f"'imc-conformance[{builtin.extra}]' (missing module: {exc.name})")
+    return UsageError(f"adapter {builtin.name!r} needs the {builtin.extra!r} extra, installed with the suite: "
+                      f"pip install '.[{builtin.extra}]' in its checkout, or pip install 'WHEEL[{builtin.extra}]' for its "
+                      f"wheel (missing module: {exc.name})")
 
 
 def adapter_choice(args, suite) -> tuple[str, list[str] | None]:

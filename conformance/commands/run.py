@@ -186,10 +186,11 @@ def command(args) -> int:
 def last_failed(args):
     """What ``--last-failed FILE`` runs again: the ids of the cases that did not pass in the saved result (None
     without the option), and the note the report makes of the rerun given how many cases it runs. The result's
-    edition is the run's unless ``--edition`` is given; a result of another suite is a usage error."""
+    edition is the run's unless ``--edition`` is given, and so is its built-in adapter unless another adapter or a
+    target is; a result of another suite is a usage error."""
     if args.last_failed is None:
         return None, lambda selected: []
-    from ..files import read_result
+    from ..files import open_corpus, read_result
 
     shown = printable(args.last_failed)
     try:
@@ -201,6 +202,11 @@ def last_failed(args):
                          f"(give --suite {saved.suite})")
     args.edition = args.edition or saved.edition
     ids = saved.not_passed()
+    if ids and not (args.adapter or args.adapter_cmd or args.adapter_socket or args.target):
+        if saved.adapter not in open_corpus(args.suite)[0].adapters:
+            raise UsageError(f"--last-failed {shown}: its cases were judged through {printable(saved.adapter)}; give "
+                             "the same --adapter-cmd, --adapter-socket or --target to run them again")
+        args.adapter = saved.adapter  # the implementation that failed them, not the suite's default
 
     def note(selected: int) -> list[str]:
         return [f"run again: {selected} of the {len(ids)} cases that did not pass in {shown}"

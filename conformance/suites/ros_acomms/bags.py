@@ -382,7 +382,7 @@ def _decompressed(compression: bytes, data: bytes, size: int, at: int) -> bytes:
             from lz4.frame import LZ4FrameDecompressor
         except ImportError:
             raise Damage(f"the chunk at byte {at:,} is lz4-compressed: reading it needs the lz4 package, which "
-                         "the ros extra installs (pip install 'imc-conformance[ros]')") from None
+                         "the suite's ros extra installs") from None
         decoder = LZ4FrameDecompressor()
         try:
             out = decoder.decompress(data, size + 1)
