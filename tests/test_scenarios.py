@@ -86,6 +86,7 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "declines-reverse-range": set(),  # declining is shown as UNSUPPORTED, not as a reading
     "answers-queries-for-others": set(),  # it answers where the reference node leaves the query (addressed-elsewhere)
     "trusts-unannounced": {"unannounced-sender"},
+    "vehicle-traffic": set(),  # its other traffic is counted in a note, judged no further
 }
 
 
@@ -513,7 +514,8 @@ def test_a_node_taking_another_reading_the_seeds_allow_gets_no_failure(suite, ca
             if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED) and c.id not in declined} == {}
     taken = {k.check.split(":reading-", 1)[1] for c in result.cases for k in c.checks if ":reading-" in k.check}
     reference, _ = run_virtual(suite, cases, edition)
-    assert [c.timeline for c in result.cases] != [c.timeline for c in reference.cases]  # the variant took effect
+    assert ([c.timeline for c in result.cases] != [c.timeline for c in reference.cases]
+            or result.notes != reference.notes)  # the variant took effect
     usual = {k.check.split(":reading-", 1)[1] for c in reference.cases for k in c.checks if ":reading-" in k.check}
     assert READINGS[variant] <= taken and taken - usual <= READINGS[variant], taken - usual
     register = suite.behaviour["ambiguities"]

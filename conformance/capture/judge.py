@@ -14,6 +14,7 @@ from ..core.verdicts import Verdict, worst
 from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched
 from .logs import Logged
+from .outside import Outside
 from .recording import OWN, RECEIVED
 from .records import Record
 
@@ -57,7 +58,7 @@ class CaptureJudge:
         self.tracker = rules.exchanges(edition, selection.scale)
         self.tallies: dict[tuple[str, str], _Tally] = {}
         self.skipped: Counter = Counter()  # records and datagrams not judged, by why
-        self.outside: Counter = Counter()  # frames of messages outside the suite, by message
+        self.outside = Outside()  # frames of messages outside the suite, by message
         self.origin: float | None = None
         self.last: float = 0.0
         self.records = self.datagrams = 0
@@ -198,7 +199,7 @@ class CaptureJudge:
         elif frame is None:
             self.skipped["datagrams on the ports that are not frames of the suite"] += 1
         elif frame.group is None:
-            self.outside[frame.outside] += 1
+            self.outside.add(frame.outside, frame.undefined)
         if frame is None or frame.group is None:
             return
         group = frame.group
@@ -291,10 +292,7 @@ class CaptureJudge:
             out = [f"{self.records:,} frames read, {self.datagrams:,} judged{span}"]
         else:
             out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged{span}"]
-        if self.outside:
-            top = ", ".join(f"{name} ({n:,})" for name, n in self.outside.most_common(8))
-            out.append(f"{sum(self.outside.values()):,} frames of {len(self.outside)} messages the suite does not "
-                       f"cover ({self.rules.outside}): {top}{' ...' if len(self.outside) > 8 else ''}")
+        out += self.outside.notes(self.rules.outside)
         if not self.tallies and not self.valid:
             out.append("no frame of the suite was judged: none in the selection" if self.log else
                        "no frame of the suite was judged: none on the ports (--port names others) or in the selection")

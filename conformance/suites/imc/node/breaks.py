@@ -71,4 +71,5 @@ VARIANTS = {
     "declines-reverse-range": "AcousticOperation and AcousticRequest REVERSE_RANGE are answered UNSUPPORTED (not supported)",
     "answers-queries-for-others": "queries addressed to another system or to 0 are answered too (as DUNE); configuration only when addressed to it",
     "trusts-unannounced": "a system that never announced itself is served, replies going to the address its datagram came from",
+    "vehicle-traffic": "streams a vehicle's other traffic to each contact, as DUNE does to its consoles: EstimatedState, EntityState and CpuUsage at 5 Hz, EulerAngles and Temperature (big-endian) at 1 Hz, and a frame of an id no IMC.xml has",
 }

@@ -45,6 +45,13 @@ MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
 LOSS_RUN = 2  # at most this many datagrams of one message dropped in a row by ``loss``
 SLOW_TURNAROUND = 4.0  # s a peer's modem takes to answer under the busy-then-completes variant
+# vehicle-traffic: (message id, payload, byte order, every how many 0.2 s ticks) of messages outside the seeds, as a
+# DUNE vehicle streams them (IMC.xml 5.4: EstimatedState's 20 fields, EntityState, CpuUsage, EulerAngles, Temperature),
+# and an id no IMC.xml defines (999: a newer or private message)
+TRAFFIC_TICK = 0.2
+TRAFFIC = ((350, bytes(88), "<", 1), (1, bytes([1, 0]) + struct.pack("<H", 6) + b"Active", "<", 1),
+           (7, bytes([12]), "<", 1), (254, bytes(40), "<", 5), (265, struct.pack(">f", 14.5), ">", 5),
+           (999, b"\x01\x02\x03", "<", 5))
 
 
 class ReferenceNode:
@@ -89,13 +96,14 @@ class ReferenceNode:
         self.dropped = 0  # datagrams that did not decode
         self.unjudged = 0  # frames beyond the reference codec's bounds (nested too deep), dropped as well
         self.next_beat = self.next_announce = None
+        self.next_traffic, self.ticks = None, 0  # vehicle-traffic
 
     # ------------------------------------------------------------------ the caller's interface
 
     @property
     def deadline(self) -> float | None:
         times = [self.queue[0][0]] if self.queue else []
-        times += [x for x in (self.next_beat, self.next_announce) if x is not None]
+        times += [x for x in (self.next_beat, self.next_announce, self.next_traffic) if x is not None]
         return min(times, default=None)
 
     def receive(self, t: float, data: bytes, source: tuple) -> None:
@@ -159,6 +167,9 @@ class ReferenceNode:
         if self.next_announce is not None and self.next_announce <= t:
             self.next_announce = t + (60.0 if self.variant == "slow-announce" else 10.0)
             out += [(addr, self._announce(t)) for addr in self.contacts.values()]
+        if self.next_traffic is not None and self.next_traffic <= t:
+            self.next_traffic, self.ticks = t + TRAFFIC_TICK, self.ticks + 1
+            out += [(addr, frame) for frame in self._traffic(t) for addr in self.contacts.values()]
         while self.queue and self.queue[0][0] <= t:
             _, _, dest, data, tag = heapq.heappop(self.queue)
             if tag not in self.cancelled:
@@ -187,6 +198,8 @@ class ReferenceNode:
                 if self.variant != "slow-announce":
                     self._later(t, PROCESSING, address, self._announce(t))
                 self.next_beat = t if self.next_beat is None else self.next_beat
+                if self.variant == "vehicle-traffic" and self.next_traffic is None:
+                    self.next_traffic = t
                 self.next_announce = t + period if self.next_announce is None else self.next_announce
             return
 
@@ -500,6 +513,17 @@ class ReferenceNode:
         return frame
 
     # ------------------------------------------------------------------ helpers
+
+    def _traffic(self, t: float) -> list[bytes]:
+        """The frames of its other traffic due at this tick (vehicle-traffic), to anyone: messages the seeds do not
+        define, so built from their ids and payloads."""
+        out = []
+        for mgid, payload, e, every in TRAFFIC:
+            if self.ticks % every == 0:
+                body = struct.pack(e + "HHHdHBHB", self.defs.sync, mgid, len(payload), self.epoch0 + t, self.system, 0,
+                                   UNKNOWN_SYSTEM, UNKNOWN_ENTITY) + payload
+                out.append(body + struct.pack(e + "H", crc16(body)))
+        return out
 
     def _lost(self, message: dict, reply: bool = False) -> bool:
         """Drop at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
