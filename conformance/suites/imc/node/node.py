@@ -72,6 +72,7 @@ class ReferenceNode:
         self.exchanges = behaviour["exchanges"]
         self.own_only = {m for c in only_to_itself for m in capabilities[c]["requests"]}  # served to itself alone
         self.turnaround = SLOW_TURNAROUND if variant == "busy-then-completes" else TURNAROUND
+        self.acoustic_timeout = behaviour["bounds"]["acoustic-queue"]["seconds"]  # each queued operation's, at most
         self.address, self.name, self.system = address, name, system
         self.peers = dict(peers if peers is not None else {"imc-peer-1": 150.0, "imc-peer-2": 1200.0})
         self.loss, self.dup, self.rng, self.broken, self.epoch0 = loss, dup, random.Random(seed), broken, epoch0
@@ -277,6 +278,9 @@ class ReferenceNode:
         if distance is None and self.variant == "silent-to-unknown-systems":
             return  # it cannot route the request
         if t < self.modem_free_at:
+            if self.variant == "queues-operations":  # carried out once the operations before it are done
+                self._on_AcousticOperation(self.modem_free_at, message)
+                return
             state(PROCESSING, "BUSY")
             if self.variant == "busy-then-completes":
                 self._on_AcousticOperation(self.modem_free_at, message)
@@ -294,6 +298,8 @@ class ReferenceNode:
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
         travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + self.turnaround
+        if distance is None and self.variant == "queues-operations":  # no answer: it gives up at its acoustic timeout
+            travel = float(self.acoustic_timeout)
         self.modem_free_at = t + travel
         if self.variant == "queued-first" and progress == "MSG_IP":
             state(PROCESSING / 2, "MSG_QUEUED")
@@ -371,8 +377,10 @@ class ReferenceNode:
     def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
         req_id = message["fields"]["req_id"]
         req_id = (req_id + 1) % 0x10000 if self.broken == "req-id-not-echoed" else req_id
-        late = message["fields"]["ttl"] + 2.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
+        late = message["fields"]["ttl"] + 4.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
         states = ((PROCESSING, "QUEUED"), (0.2 + late, "TRANSMIT"), (0.5 + late, "OK"))
+        if self.variant == "slow-iridium-link":  # sent before a ttl of 2 s, its OK 1.8 s after it
+            states = ((PROCESSING, "QUEUED"), (1.9, "TRANSMIT"), (3.8, "OK"))
         for delay, name in states[::2] if self.broken == "late-ok" else states:
             fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": ""}
             self._reply(t, delay, message, "IridiumTxStatus", fields)

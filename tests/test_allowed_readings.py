@@ -1,0 +1,57 @@
+"""Behaviour the seeds allow, which the suite used to fail: a node that queues acoustic operations answers the
+robustness probe once its queue drains (the probe's wait grows with the requests of its kind just replayed, by the
+register's bound ``acoustic-queue``); an Iridium status that reaches the suite shortly after the ttl (the register's
+bound ``link``). Each shown by a variant of the reference node, in both editions, on virtual time."""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.kinds.robustness.phase import PhaseMachine
+
+from live_harness import run_virtual
+
+PROBE = "imc/AcousticOperation/robustness/still-served"
+
+
+def unexpected(result) -> dict[str, str]:
+    return {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED)}
+
+
+@pytest.mark.parametrize("edition", ["imc-5.4.30", "imc-5.4.11"])
+def test_a_node_that_queues_acoustic_operations_still_serves_the_probe(suite, cases, edition):
+    result, _ = run_virtual(suite, cases, edition, kinds=("scenario", "robustness"), variant="queues-operations",
+                            strict=True)
+    assert unexpected(result) == {} and result.exit_code() == 0
+    case = next(c for c in result.cases if c.id == PROBE)
+    assert case.verdict is Verdict.PASS
+    assert any("probe:corpus" == k.check and k.verdict is Verdict.PASS for k in case.checks)
+
+
+def test_without_the_queue_bound_the_same_node_would_be_taken_for_silenced(suite, cases, monkeypatch):
+    monkeypatch.setattr(PhaseMachine, "_queue", lambda self, spec, frames: 0)
+    result, _ = run_virtual(suite, cases, kinds=("robustness",), variant="queues-operations")
+    case = next(c for c in result.cases if c.id == PROBE)
+    assert case.verdict is Verdict.FAIL and "no AcousticOperation after block" in case.detail
+
+
+def test_a_probe_silenced_for_good_is_still_caught_and_names_its_longer_wait(suite, cases):
+    """A node whose acoustic requests stop being served after the corpus: the probe waits out its queue bound once,
+    then fails, its timeline naming the wait and the requests it counted."""
+    result, _ = run_virtual(suite, cases, kinds=("robustness",), broken="dies-on-own-id")
+    case = next(c for c in result.cases if c.id == PROBE)
+    notes = [e["note"] for e in case.timeline if e.get("event") == "probe" and "no AcousticOperation" in e["note"]]
+    assert case.verdict is Verdict.FAIL and "hostile block from-own-id" in case.detail
+    assert any("bound acoustic-queue" in n and "for each of the 1 request of its kind" in n for n in notes), notes
+
+
+def test_the_ttl_tolerance_is_the_registers_and_a_default_is_refused(suite, cases):
+    case = copy.deepcopy(next(c.data for c in cases if c.id == "imc/IridiumMsgTx/scenario/ttl"))
+    step = case["steps"][1]
+    assert step["not_after"]["tolerance"] == "link" and suite.behaviour["bounds"]["link"]["seconds"] >= 2.5
+    del step["not_after"]["tolerance"]
+    problem = suite.live_problem("scenario", case)
+    assert problem[0] == ".steps[1].not_after.tolerance" and "names its source" in problem[1]
