@@ -55,3 +55,33 @@ def test_the_ttl_tolerance_is_the_registers_and_a_default_is_refused(suite, case
     del step["not_after"]["tolerance"]
     problem = suite.live_problem("scenario", case)
     assert problem[0] == ".steps[1].not_after.tolerance" and "names its source" in problem[1]
+
+
+@pytest.mark.parametrize("variant", ["reused-id-replaces", "reused-id-cancels"])
+def test_a_reused_request_id_replacing_or_cancelling_is_a_reading_live_and_in_its_recording(suite, cases, tmp_path,
+                                                                                             variant):
+    """One chain or two: a node whose second request with the same req_id replaces the first (the first says nothing
+    more) or cancels it (the first ends in ERROR, the second is not carried out) fails nothing, live or judged again
+    from its recording by the passive exchange rules; each shows the reading reused-request-id."""
+    import json
+
+    from imc_conformance.capture.recording import Recorder, about_run
+    from imc_conformance.cli import main
+
+    from live_harness import EVERYTHING
+
+    path, out = tmp_path / "run.pcapng", tmp_path / "judged.json"
+    options = dict(EVERYTHING, time_scale=1.0, profile=suite.profile("seed"))
+    ids = [c.id for c in cases if c.kind == "scenario"]
+    recorder = Recorder(path, about_run("imc", "imc-5.4.30", ids, options, "udp://127.0.0.1:6002", None, None, 10.0))
+    try:
+        live, _ = run_virtual(suite, cases, "imc-5.4.30", options=options, recorder=recorder, variant=variant)
+    finally:
+        recorder.close(complete=True)
+    case = next(c for c in live.cases if c.id == "imc/AcousticRequest/scenario/reused-id")
+    assert case.verdict is Verdict.IMPL_DEFINED and any(k.check.endswith(":reading-reused-request-id") for k in case.checks)
+    assert main(["pcap", str(path), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    judged = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    assert judged["imc/AcousticRequest/capture/exchange/acoustic-request/reading/reused-request-id"] == "IMPL_DEFINED"
+    assert not {k: v for k, v in judged.items() if v not in ("PASS", "IMPL_DEFINED")}

@@ -59,7 +59,6 @@ CAUGHT = {
     "acts-on-others-requests": ("imc/LblConfig/scenario/set-for-another-system", "NON_STRICT"),
     "trusts-own-id": ("imc/LblConfig/scenario/spoofed-own-source", "NON_STRICT"),
     "rounds-beacons": ("imc/LblConfig/scenario/set-then-get", "NON_STRICT"),
-    "reused-id-cancels": ("imc/AcousticRequest/scenario/reused-id", "FAIL"),
     "drops-when-many": ("imc/HistoricDataQuery/scenario/many-at-once", "FAIL"),
     "rewrites-producer": ("imc/HistoricDataQuery/scenario/keeps-producer", "NON_STRICT"),
     "executes-others-commands": ("imc/RemoteCommand/scenario/not-executed-for-another", "NON_STRICT"),
@@ -70,6 +69,8 @@ CAUGHT = {
     "replies-to-every-client": ("imc/AcousticSystemsQuery/scenario/two-clients", "NON_STRICT"),
     "dies-on-own-id": ("imc/AcousticRequest/robustness/still-served", "FAIL"),
     "exhausted-by-many": ("imc/HistoricDataQuery/robustness/still-served", "FAIL"),
+    "reused-id-crossed": ("imc/AcousticRequest/scenario/reused-id", "NON_STRICT"),
+    "dies-on-reused-id": ("imc/AcousticRequest/scenario/reused-id", "FAIL"),
 }
 
 
@@ -89,6 +90,8 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "vehicle-traffic": set(),  # its other traffic is counted in a note, judged no further
     "queues-operations": set(),  # its queue shows in the robustness phase (tests/test_allowed_readings.py)
     "slow-iridium-link": set(),  # its late OK is within the register's bound "link"
+    "reused-id-replaces": {"reused-request-id"},  # the first, replaced, says nothing more
+    "reused-id-cancels": {"reused-request-id"},  # the second, cancelling the first, is not carried out
 }
 
 

@@ -685,8 +685,12 @@ class Machine:
                             for r in step.replies)
         level = weaker(spec.get("level", "MUST"), states.level)
         if step.terminal is None:
-            self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})", level, states.clause,
-                       blind=self._blind(step))
+            what = f"no terminal state within {bound} s ({trail})"
+            reading = self._silence_reading(step, unended=True)
+            if reading is not None:  # a request a later one may have replaced: its end is not owed
+                self._read(step, reading, what)
+            else:
+                self._find(step, "terminal", False, what, level, states.clause, blind=self._blind(step))
         else:
             if step.open_end is not None:
                 self._read(step, step.open_end, f"ended in {self._terminal_name(step)}: read as the end of the request")
@@ -721,18 +725,26 @@ class Machine:
         """Where the register reads silence as allowed (the exchange's ``silence`` for the request, or the rules for
         every request, or the step's ``if_silent`` where it awaits no reply), the lack of a reply is noted as that
         reading, not failed (unless the session could not see everything: then it is not judged)."""
-        ambiguity = step.spec.get("if_silent")
+        ambiguity = self._silence_reading(step)
+        if ambiguity is None:
+            return False
+        self._read(step, ambiguity, what)
+        self._readings(step)
+        return True
+
+    def _silence_reading(self, step: _Step, unended: bool = False) -> str | None:
+        """The reading under which the step's request may go unanswered (``unended``: may be left without its end),
+        or None; None too where the session could not see everything."""
+        ambiguity = None if unended else step.spec.get("if_silent")
         exchange = self._exchange(step)
         if exchange is not None:
             ref = step.spec["reply_to"]
             request = self.sent[ref].decoded.get("fields", {})
             ambiguity = silence_allowed(self.wire, exchange, request, self.edition, self._facts(ref, exchange),
-                                        self.program.silence)
+                                        self.program.silence, unended)
         if ambiguity is None or self._blind(step) is not None or self.suspect:
-            return False
-        self._read(step, ambiguity, what)
-        self._readings(step)
-        return True
+            return None
+        return ambiguity
 
     def _facts(self, ref: str, exchange: dict) -> dict:
         """What the silence rules may select a request by, beyond its fields: the fields naming a system nobody
@@ -746,10 +758,16 @@ class Machine:
                    if order.index(s) < order.index(ref) and self._exchange_of(s) is exchange]
         reuses = {r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"
                   and any(same(e.get(r["request_field"]), sent.get(r["request_field"])) for e in earlier)}
+        answered = {p for p in (self._answered_step(r) for r in self.backlog) if p is not None} | {
+            s for s, n in self.answers.items() if n}
+        later = [self.sent[s].decoded.get("fields", {}) for s in self.sent if s in answered
+                 and order.index(s) > order.index(ref) and self._exchange_of(s) is exchange]
+        reused = {r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"
+                  and any(same(e.get(r["request_field"]), sent.get(r["request_field"])) for e in later)}
         composed = self.sent[ref]
         to = self.wire.destination(Parsed(composed.data, composed.message, composed.decoded))
         elsewhere = to is not None and to[0] not in (self.addressing.node, self.wire.anyone)
-        return {"nobody": nobody, "reuses": reuses, "to": "elsewhere" if elsewhere else None}
+        return {"nobody": nobody, "reuses": reuses, "reused": reused, "to": "elsewhere" if elsewhere else None}
 
     def _readings(self, step: _Step) -> None:
         """One INFO check per open reading the step met: never a failure, always in the report."""

@@ -46,7 +46,6 @@ BREAKS = {
     "acts-on-others-requests": "a request addressed to another system is acted on as its own: SET_CFG changes its beacons (a SHOULD)",
     "trusts-own-id": "a datagram carrying the node's own id as its source is acted on (a SHOULD: it is its own, heard back, or spoofed)",
     "rounds-beacons": "stored beacons keep their latitude and longitude as fp32 (a SHOULD: the configuration set, every field)",
-    "reused-id-cancels": "an AcousticRequest reusing the req_id of an outstanding one silently cancels the first: nothing more is said of it",
     "drops-when-many": "QUERYs beyond 4 within a second are dropped, and their resends, taken for copies of them, too",
     "rewrites-producer": "a stored HistoricSample takes its sender's id as its producer (a SHOULD: the field's description)",
     "executes-others-commands": "a RemoteCommand for another system is executed by the node too (a SHOULD)",
@@ -57,6 +56,8 @@ BREAKS = {
     "replies-to-every-client": "every reply is also sent, addressed to it, to each other client (a SHOULD: one reply per query)",
     "dies-on-own-id": "after a datagram carrying its own id, acoustic requests go unanswered (caught by --robustness)",
     "exhausted-by-many": "after 80 HistoricDataQuery within a second, no request is served (caught by --robustness)",
+    "reused-id-crossed": "an AcousticRequest reusing the req_id of an outstanding one crosses the two: the first's end is reported under the second's type (a SHOULD: the states of each type)",
+    "dies-on-reused-id": "after an AcousticRequest reusing the req_id of an outstanding one, acoustic requests go unanswered",
 }
 
 VARIANTS = {
@@ -74,4 +75,6 @@ VARIANTS = {
     "vehicle-traffic": "streams a vehicle's other traffic to each contact, as DUNE does to its consoles: EstimatedState, EntityState and CpuUsage at 5 Hz, EulerAngles and Temperature (big-endian) at 1 Hz, and a frame of an id no IMC.xml has",
     "queues-operations": "AcousticOperations that find the modem busy are queued and carried out one at a time, not answered BUSY; one to a system not on the acoustic channel takes its acoustic timeout (10 s, as DUNE)",
     "slow-iridium-link": "an Iridium message is transmitted 1.9 s after the request and its OK reaches the suite 3.8 s after it (1.8 s after a ttl of 2 s: the node's checking period and a slow link)",
+    "reused-id-replaces": "an AcousticRequest reusing the req_id of an outstanding one replaces it: nothing more is said of the first, the second is carried out",
+    "reused-id-cancels": "an AcousticRequest reusing the req_id of an outstanding one cancels it: the first ends in ERROR, the second is not carried out",
 }

@@ -87,7 +87,7 @@ class ReferenceNode:
         self.beacons: list = []
         self.groups: dict[str, object] = {}  # SystemGroup: group name -> its list of systems
         self.kept: list[dict] = []  # RemoteCommands kept for resending
-        self.requests: dict[int, tuple[int, float]] = {}  # AcousticRequest req_id -> (its tag, when it ends)
+        self.requests: dict[int, tuple] = {}  # AcousticRequest req_id -> (its tag, when it ends, it, its end state)
         self.cancelled: set[int] = set()  # tags of queued frames not to send (reused-id-cancels)
         self.queries: deque = deque()  # when the latest HistoricDataQueries came (drops-when-many, exhausted-by-many)
         self.dropped_ids: set[int] = set()  # the req_ids of the QUERYs dropped (drops-when-many)
@@ -322,8 +322,8 @@ class ReferenceNode:
         echoed_type = self._v("AcousticStatus", "type", "MSG") if self.broken == "type-not-echoed" else f["type"]
         req_id = (f["req_id"] + 1) % 0x10000 if self.broken == "req-id-not-echoed" else f["req_id"]
         tag, previous = next(self.order), self.requests.get(f["req_id"])
-        if previous is not None and previous[1] > t and self.broken == "reused-id-cancels":
-            self.cancelled.add(previous[0])  # the outstanding request with this id says nothing more
+        if previous is not None and previous[1] > t and self._reused(t, message, previous):
+            return
 
         def status(delay: float, name: str, range_: float = 0.0, info: str = "") -> None:
             fields = {"req_id": req_id, "type": echoed_type, "status": self._status(name), "info": info, "range": range_}
@@ -355,7 +355,8 @@ class ReferenceNode:
         if self.broken == "ignores-timeout":
             travel += timeout + 2.0
         self.modem_free_at = t + travel
-        self.requests[f["req_id"]] = (tag, t + travel)
+        final = "RANGE_RECEIVED" if "RANGE" in kind else "SENT"
+        self.requests[f["req_id"]] = (tag, t + travel, message, final, float(distance) if "RANGE" in kind else 0.0)
         if self.variant == "queued-first":
             status(PROCESSING / 2, "QUEUED")
         status(PROCESSING, "IN_PROGRESS")
@@ -365,7 +366,6 @@ class ReferenceNode:
             self.modem_free_at = t + timeout
             status(timeout, "INPUT_FAILURE", info="timed out")
             return
-        final = "RANGE_RECEIVED" if "RANGE" in kind else "SENT"
         if final == "RANGE_RECEIVED" and self.variant == "sent-before-range-received":
             status(travel / 2, "SENT")
         status(travel, final, float(distance) if final == "RANGE_RECEIVED" else 0.0)
@@ -373,6 +373,32 @@ class ReferenceNode:
             status(travel + 0.1, "IN_PROGRESS")
         elif self.broken == "two-terminals":
             status(travel + 0.1, "ERROR", info="second final status")
+
+    def _reused(self, t: float, message: dict, previous: tuple) -> bool:
+        """A request reusing the req_id of an outstanding one: whether it is dealt with here (not carried out as a
+        request of its own). The seeds leave it open: it may replace the first (reused-id-replaces) or cancel it
+        (reused-id-cancels); broken, it crosses the two (the first's end reported with the second's type) or stops
+        the node's acoustic service."""
+        first_tag, end, first, final, range_ = previous
+        if self.variant in ("reused-id-replaces", "reused-id-cancels") or self.broken in ("reused-id-crossed",
+                                                                                         "dies-on-reused-id"):
+            self.cancelled.add(first_tag)  # the first says nothing more of itself
+            self.modem_free_at = t
+        if self.broken == "dies-on-reused-id":
+            self.acoustic_dead = True
+            return True
+        if self.variant == "reused-id-cancels":  # the first ends now, in a failure; the second is not carried out
+            fields = {"req_id": first["fields"]["req_id"], "type": first["fields"]["type"], "status": self._status("ERROR"),
+                      "info": "cancelled: a request reused its id", "range": 0.0}
+            self._reply(t, PROCESSING, first, "AcousticStatus", fields, entity=ACOUSTIC_ENTITY)
+            return True
+        if self.broken == "reused-id-crossed":  # the first's end, reported under the second's type
+            self.modem_free_at = end
+            fields = {"req_id": first["fields"]["req_id"], "type": message["fields"]["type"],
+                      "status": self._status(final), "info": "", "range": range_}
+            self._reply(t, end - t, first, "AcousticStatus", fields, entity=ACOUSTIC_ENTITY)
+            return False
+        return False
 
     def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
         req_id = message["fields"]["req_id"]
