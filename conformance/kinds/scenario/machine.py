@@ -770,12 +770,16 @@ class Machine:
         return {"nobody": nobody, "reuses": reuses, "reused": reused, "to": "elsewhere" if elsewhere else None}
 
     def _readings(self, step: _Step) -> None:
-        """One INFO check per open reading the step met: never a failure, always in the report."""
+        """One check per open reading the step met, always in the report: INFO, never a failure; or, where the
+        register's entry is a SHOULD (the seeds define a reply for the case without requiring it, and the node was
+        silent), a SHOULD not met."""
         for ambiguity, what in step.readings.items():
             entry = self.program.ambiguities.get(ambiguity, {})
             reading = f": {entry['suite']}" if "suite" in entry else ""
-            self._find(step, f"reading-{ambiguity}", True, f"{what} (open reading {ambiguity}{reading})", "INFO",
-                       entry.get("clause"))
+            should = entry.get("level") == "SHOULD"
+            self._find(step, f"reading-{ambiguity}", not should,
+                       f"{what} ({'register entry' if should else 'open reading'} {ambiguity}{reading})",
+                       "SHOULD" if should else "INFO", entry.get("clause"))
 
     # ------------------------------------------------------------------ helpers
 

@@ -56,8 +56,9 @@ class PassiveExchanges:
     timing bounds, which exchanges name; ``silence``: the rules under which any request may go unanswered."""
 
     def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None,
-                 bounds: dict | None = None, nobody: int | None = None, silence=()):
+                 bounds: dict | None = None, nobody: int | None = None, silence=(), ambiguities: dict | None = None):
         self.wire, self.anyone, self.edition, self.bounds = wire, anyone, edition, bounds or {}
+        self.ambiguities = ambiguities or {}  # id -> the register's entry: a SHOULD entry's silence is NON_STRICT
         self.nobody, self.silence = nobody, tuple(silence)
         self.state_cache: dict[tuple, States] = {}
         self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
@@ -259,10 +260,8 @@ class PassiveExchanges:
                                       f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
             silent = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence)
-            if silent is not None:  # the seeds define no reply to this request: an open reading, never a failure
-                return [self._finding(o, f"reading/{silent}", Verdict.IMPL_DEFINED, ex["clause"],
-                                      f"no {ex['reply']} {self._between(o)} within {bound:g} s (open reading {silent})",
-                                      o.request)]
+            if silent is not None:  # the seeds require no reply to this request: a reading, never a failure
+                return [self._reading(o, silent, f"no {ex['reply']} {self._between(o)} within {bound:g} s")]
             return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
                                   f"no {ex['reply']} {self._between(o)} within {bound:g} s", o.request)]
         self.ended[id(o.rule)].append(o)
@@ -271,8 +270,7 @@ class PassiveExchanges:
             unended = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence,
                                       unended=True)
             if unended is not None:  # a later request reusing its identifier may have replaced it
-                return [self._finding(o, f"reading/{unended}", Verdict.IMPL_DEFINED, ex["clause"],
-                                      f"{what} (open reading {unended})", o.request)]
+                return [self._reading(o, unended, what)]
             return [self._finding(o, "terminal", LEVELS[weaker(ex["level"], o.states.level)], o.states.clause, what,
                                   o.request)]
         if o.open_end is not None:  # it ended in a state the seeds leave open: the reading, shown
@@ -298,6 +296,14 @@ class PassiveExchanges:
             facts[fact] = {e["request_field"] for e in o.rule.echoes if any(
                 same(p.request.fields.get(e["request_field"]), mine.fields.get(e["request_field"])) for p in chosen)}
         return facts
+
+    def _reading(self, o: _Open, ambiguity: str, what: str) -> Finding:
+        """A request's silence the register reads: IMPL_DEFINED (an open reading), or NON_STRICT where the entry is a
+        SHOULD (the seeds define a reply for the case without requiring it)."""
+        should = self.ambiguities.get(ambiguity, {}).get("level") == "SHOULD"
+        return self._finding(o, f"reading/{ambiguity}", Verdict.NON_STRICT if should else Verdict.IMPL_DEFINED,
+                             o.rule.exchange["clause"],
+                             f"{what} ({'register entry' if should else 'open reading'} {ambiguity})", o.request)
 
     # ------------------------------------------------------------ shared
 

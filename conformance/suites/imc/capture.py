@@ -49,7 +49,8 @@ class ImcCaptureRules:
                      if ex["request"]["message"] in known and ex["reply"] in known]
         behaviour = self.behaviour or {}
         tracker = PassiveExchanges(self.wire, exchanges, edition, scale, UNKNOWN_SYSTEM, behaviour.get("bounds"),
-                                   nobody=0, silence=behaviour.get("silence", ()))  # 0: DUNE's Announce goes to it
+                                   nobody=0, silence=behaviour.get("silence", ()),  # 0: DUNE's Announce goes to it
+                                   ambiguities=behaviour.get("ambiguities"))
         self.watched = {self.defs[m].id for m in tracker.messages}
         return tracker
 
