@@ -82,3 +82,18 @@ def test_the_wire_tells_other_traffic_from_a_broken_frame_in_either_byte_order(s
     assert wire.parse(bytes(damaged)).problem.startswith("crc") and wire.parse(bytes(damaged)).outside is None
     null = wire.parse(sound(defs, defs.null_id, b"", order))
     assert null.problem.startswith("unknown-id") and null.outside is None  # the null id names no message at all
+
+
+def test_watch_judges_that_traffic_alike(suite):
+    """What ``watch`` does with each datagram its socket receives (``CaptureJudge.received``)."""
+    from imc_conformance.capture.datagrams import Datagram
+    from imc_conformance.capture.judge import CaptureJudge, Selection
+
+    node = ReferenceNode(suite.defs, suite.behaviour, edition="imc-5.4.30", address=NODE, variant=TRAFFIC)
+    judge = CaptureJudge("imc", suite.capture_rules(), "imc-5.4.30", Selection(frozenset([6001])))
+    for i, payload in enumerate(node._traffic(0.0)):
+        judge.received(Datagram(i + 1, 1.7e9 + i, "127.0.0.1", 6002, "127.0.0.1", 6001, payload))
+    result = judge.result(implementation="watch", started="", duration=0.0, strict=True, title="watch")
+    assert result.exit_code() == 2 and not result.cases  # nothing of the suite: nothing judged, nothing failed
+    assert any("id 350 (1)" in n and "does not cover" in n for n in result.notes)
+    assert any("id 999 (1)" in n and "never a failure" in n for n in result.notes)
