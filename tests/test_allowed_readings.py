@@ -85,3 +85,11 @@ def test_a_reused_request_id_replacing_or_cancelling_is_a_reading_live_and_in_it
     judged = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
     assert judged["imc/AcousticRequest/capture/exchange/acoustic-request/reading/reused-request-id"] == "IMPL_DEFINED"
     assert not {k: v for k, v in judged.items() if v not in ("PASS", "IMPL_DEFINED")}
+
+
+def test_a_probes_queue_bound_is_one_of_the_registers(suite, cases):
+    case = copy.deepcopy(next(c.data for c in cases if c.id == PROBE))
+    assert case["probe"]["queued"] == "acoustic-queue" and suite.live_problem("robustness", case) is None
+    case["probe"]["queued"] = "a-while"
+    problem = suite.live_problem("robustness", case)
+    assert problem[0].endswith(".queued") and "names its source" in problem[1]

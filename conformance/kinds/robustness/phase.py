@@ -103,7 +103,8 @@ def as_scenario(case: dict) -> dict:
         steps = [{"id": "alive", "alive": probe["alive"], "within": probe["within"]}]
     else:
         steps = [{"id": "probe", "send": probe["send"], "encoding": probe.get("encoding", "le")},
-                 {"id": "reply", "expect": probe["expect"], "reply_to": "probe", "within": probe["within"]}]
+                 {"id": "reply", "expect": probe["expect"], "reply_to": "probe", "within": probe["within"]}
+                 | ({"queued": probe["queued"]} if "queued" in probe else {})]
     if "covers" in case:
         steps[-1]["covers"] = case["covers"]
     return dict(case, steps=steps)
