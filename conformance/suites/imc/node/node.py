@@ -50,7 +50,7 @@ SLOW_TURNAROUND = 4.0  # s a peer's modem takes to answer under the busy-then-co
 # and an id no IMC.xml defines (999: a newer or private message)
 TRAFFIC_TICK = 0.2
 TRAFFIC = ((350, bytes(88), "<", 1), (1, bytes([1, 0]) + struct.pack("<H", 6) + b"Active", "<", 1),
-           (7, bytes([12]), "<", 1), (254, bytes(40), "<", 5), (265, struct.pack(">f", 14.5), ">", 5),
+           (7, bytes([12]), "<", 1), (254, bytes(40), "<", 5), (263, struct.pack(">f", 14.5), ">", 5),
            (999, b"\x01\x02\x03", "<", 5))
 
 
