@@ -155,7 +155,7 @@ class PhaseMachine:
         self.waiting: _Wait | None = None
         self.impairments: list[str] = []  # what the link could not show, in order
         self.replayed: list[Frame] = []  # the frames replayed since the last round (a queueing node works them off)
-        self.requests_in: dict[int, str | None] = {}  # id(frame) -> the id of the exchange it opens as a request
+        self.requests_in: dict[bytes, str | None] = {}  # a replayed frame -> the exchange it opens as a request
         self._script = None
 
     # ------------------------------------------------------------------ driving the script
@@ -440,7 +440,7 @@ class PhaseMachine:
         wanted = self._exchange_of(spec)
         count = 0
         for frame in frames:
-            key = id(frame)
+            key = frame.data
             if key not in self.requests_in:
                 parsed = self.wire.parse(frame.data)
                 exchange = None if parsed.decoded is None else exchange_for(
