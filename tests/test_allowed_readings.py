@@ -93,3 +93,29 @@ def test_a_probes_queue_bound_is_one_of_the_registers(suite, cases):
     case["probe"]["queued"] = "a-while"
     problem = suite.live_problem("robustness", case)
     assert problem[0].endswith(".queued") and "names its source" in problem[1]
+
+
+def test_a_state_outside_a_table_stays_a_reading_though_its_entry_is_a_should(suite, cases):
+    """Only a request's silence takes its register entry's SHOULD: an Iridium status outside IridiumTxStatus's table
+    (entry states-without-a-table, whose SHOULD is the rules of one terminal state) is still an IMPL_DEFINED reading (the
+    scenario's own terminal rule judges the value apart)."""
+    from imc_conformance.suites.imc.node import ReferenceNode
+
+    class OddStatus(ReferenceNode):
+        def _reply(self, t, delay, request, abbrev, fields, entity=0, tag=None):
+            if abbrev == "IridiumTxStatus" and fields["status"] == self._v("IridiumTxStatus", "status", "OK"):
+                fields = dict(fields, status=77)  # a status the table does not name
+            super()._reply(t, delay, request, abbrev, fields, entity, tag)
+
+    from live_harness import NODE, virtual_session, EVERYTHING
+    from imc_conformance.core.runner import run_cases
+
+    node = OddStatus(suite.defs, suite.behaviour, edition=suite.editions[0], address=NODE)
+    session, link = virtual_session(suite, suite.editions[0], node=node)
+    chosen = [c for c in cases if c.id == "imc/IridiumMsgTx/scenario/status"]
+    result = run_cases(session, suite, chosen, edition=suite.editions[0], adapter="virtual", options=EVERYTHING,
+                       clock=link.now)
+    case = result.cases[0]
+    assert suite.behaviour["ambiguities"]["states-without-a-table"]["level"] == "SHOULD"
+    assert any(k.check.endswith(":reading-states-without-a-table") and k.verdict is Verdict.IMPL_DEFINED
+               for k in case.checks)

@@ -116,6 +116,7 @@ class _Step:
     bound: float | None = None  # when the step's own time is up (a quiet period after a terminal state may move until)
     open_end: str | None = None  # the ambiguity id when the sequence's last state is one the seeds leave open
     readings: dict = field(default_factory=dict)  # ambiguity id -> what the node did that the seeds leave open
+    silences: set = field(default_factory=set)  # the readings among them that are a request's silence
     states: tuple = ()  # (the States of its replies, or None), once worked out
     seen: set = field(default_factory=set)  # what it took, to tell the link's byte-identical copies
 
@@ -689,6 +690,7 @@ class Machine:
             reading = self._silence_reading(step, unended=True)
             if reading is not None:  # a request a later one may have replaced: its end is not owed
                 self._read(step, reading, what)
+                step.silences.add(reading)
             else:
                 self._find(step, "terminal", False, what, level, states.clause, blind=self._blind(step))
         else:
@@ -729,6 +731,7 @@ class Machine:
         if ambiguity is None:
             return False
         self._read(step, ambiguity, what)
+        step.silences.add(ambiguity)
         self._readings(step)
         return True
 
@@ -770,13 +773,13 @@ class Machine:
         return {"nobody": nobody, "reuses": reuses, "reused": reused, "to": "elsewhere" if elsewhere else None}
 
     def _readings(self, step: _Step) -> None:
-        """One check per open reading the step met, always in the report: INFO, never a failure; or, where the
-        register's entry is a SHOULD (the seeds define a reply for the case without requiring it, and the node was
-        silent), a SHOULD not met."""
+        """One check per open reading the step met, always in the report: INFO, never a failure; or, for a request's
+        silence where the register's entry is a SHOULD (the seeds define a reply for the case without requiring it),
+        a SHOULD not met."""
         for ambiguity, what in step.readings.items():
             entry = self.program.ambiguities.get(ambiguity, {})
             reading = f": {entry['suite']}" if "suite" in entry else ""
-            should = entry.get("level") == "SHOULD"
+            should = ambiguity in step.silences and entry.get("level") == "SHOULD"
             self._find(step, f"reading-{ambiguity}", not should,
                        f"{what} ({'register entry' if should else 'open reading'} {ambiguity}{reading})",
                        "SHOULD" if should else "INFO", entry.get("clause"))
