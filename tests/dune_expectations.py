@@ -74,7 +74,7 @@ def with_robustness(profile: str) -> bool:
 @pytest.mark.parametrize("profile", sorted(MESSAGES))
 def test_each_message_gets_its_known_verdict(profile):
     doc = result(profile)
-    assert doc["complete"] and doc["notes"][0] == f"profile: {profile}"
+    assert doc["complete"] and f"profile: {profile}" in doc["notes"]  # the dune profile's practice note comes first
     expected = dict(MESSAGES[profile])
     if not with_robustness(profile):
         expected.update({name: "PASS" for name in ROBUSTNESS_ONLY})
