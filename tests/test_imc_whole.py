@@ -293,3 +293,16 @@ def test_an_imc_xml_giving_a_seed_messages_id_another_name_is_refused_in_one_lin
     next(m for m in xml["messages"] if m["id"] == 150).update(abbrev="Heartbeats")
     with pytest.raises(XmlError, match="<message abbrev='Heartbeats'>: id 150 is the seeds' Heartbeat"):
         merged_document(seed, xml)
+
+
+def test_a_vehicles_other_traffic_is_judged_by_the_whole_protocol_live(whole):
+    """With the whole protocol, a vehicle's navigation and entity traffic decodes as suite messages (a malformed one
+    would fail its message) and only an id no IMC.xml defines is left to a note; no scenario fails."""
+    from live_harness import run_virtual
+
+    suite, cases = whole
+    result, _ = run_virtual(suite, [c for c in cases if c.kind == "scenario"], "imc-5.4.30", variant="vehicle-traffic",
+                            strict=True)
+    assert result.exit_code() == 0
+    assert not any("does not cover" in n for n in result.notes)
+    assert any("id 999 (" in n and "no definition" in n for n in result.notes)

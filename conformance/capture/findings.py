@@ -24,6 +24,7 @@ class Frame:
     src: int | None = None  # the sender's and the addressee's system ids, where the frame gives them
     dst: int | None = None
     undecided: bool = False  # ``rule`` says why the frame could not be judged (INCONCLUSIVE), not what it breaks
+    undefined: bool = False  # (outside) no definition the suite has names its message at all
 
 
 @dataclass(slots=True)

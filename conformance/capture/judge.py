@@ -11,9 +11,11 @@ from dataclasses import dataclass, field
 
 from ..core.results import CaseResult, CheckResult, MessageResult, RunResult, message_verdict
 from ..core.verdicts import Verdict, worst
+from ..wording import counted
 from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched
 from .logs import Logged
+from .outside import Outside
 from .recording import OWN, RECEIVED
 from .records import Record
 
@@ -57,7 +59,7 @@ class CaptureJudge:
         self.tracker = rules.exchanges(edition, selection.scale)
         self.tallies: dict[tuple[str, str], _Tally] = {}
         self.skipped: Counter = Counter()  # records and datagrams not judged, by why
-        self.outside: Counter = Counter()  # frames of messages outside the suite, by message
+        self.outside = Outside()  # frames of messages outside the suite, by message
         self.origin: float | None = None
         self.last: float = 0.0
         self.records = self.datagrams = 0
@@ -199,7 +201,7 @@ class CaptureJudge:
         elif frame is None:
             self.skipped["datagrams on the ports that are not frames of the suite"] += 1
         elif frame.group is None:
-            self.outside[frame.outside] += 1
+            self.outside.add(frame.outside, frame.undefined)
         if frame is None or frame.group is None:
             return
         group = frame.group
@@ -290,13 +292,10 @@ class CaptureJudge:
         span = f", from {_when(self.origin)}" + ("" if self.jumps else f" for {self.last - self.origin:.3f} s") \
             if self.origin else ""  # a log split by its clock's jumps spans no one stretch of time
         if self.log:
-            out = [f"{_count(self.records, 'frame')} read, {self.datagrams:,} judged{span}"]
+            out = [f"{counted(self.records, 'frame', grouped=True)} read, {self.datagrams:,} judged{span}"]
         else:
             out = [f"{self.records:,} records, {self.datagrams:,} datagrams on the ports judged{span}"]
-        if self.outside:
-            top = ", ".join(f"{name} ({n:,})" for name, n in self.outside.most_common(8))
-            out.append(f"{_count(sum(self.outside.values()), 'frame')} of {_count(len(self.outside), 'message')} "
-                       f"the suite does not cover ({self.rules.outside}): {top}{' ...' if len(self.outside) > 8 else ''}")
+        out += self.outside.notes(self.rules.outside)
         if not self.tallies and not self.valid:
             out.append("no frame of the suite was judged: none in the selection" if self.log else
                        "no frame of the suite was judged: none on the ports (--port names others) or in the selection")
@@ -312,11 +311,11 @@ class CaptureJudge:
                        "rules" if self.log else f"{self.duplicates:,} datagrams identical to one shortly before "
                        "(duplicated by the network) were judged once by the exchange rules")
         if self.jumps:
-            out.append(f"the log's clock jumped {_count(self.jumps, 'time')} (ahead by more than {CLOCK_JUMP:g} s, back "
-                       f"by more than {CLOCK_BACK:g} s and again to where it was, or a frame with no time: a gap in the "
-                       "log, its clock set, another system's clock, a message kept with its first time), splitting it "
-                       f"into {self.jumps + 1:,} stretches timed apart: {_count(self.across, 'exchange')} open across "
-                       "a split INCONCLUSIVE")
+            out.append(f"the log's clock jumped {counted(self.jumps, 'time', grouped=True)} (ahead by more than "
+                       f"{CLOCK_JUMP:g} s, back by more than {CLOCK_BACK:g} s and again to where it was, or a frame with "
+                       "no time: a gap in the log, its clock set, another system's clock, a message kept with its first "
+                       f"time), splitting it into {self.jumps + 1:,} stretches timed apart: "
+                       f"{counted(self.across, 'exchange', grouped=True)} open across a split INCONCLUSIVE")
         if self.dissector.held or self.dissector.given_up:
             out.append(f"{len(self.dissector.held) + self.dissector.given_up:,} IP datagrams never reassembled "
                        "(fragments missing from the capture)")
@@ -393,5 +392,3 @@ def _when(t: float) -> str:
         return f"{t:.6f} s after 1970"
 
 
-def _count(n: int, noun: str) -> str:
-    return f"{n:,} {noun}{'s' if n != 1 else ''}"

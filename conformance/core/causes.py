@@ -1,6 +1,6 @@
 """Failures grouped by cause across messages: what a reader fixes, rather than what a case id names.
 
-A case that fails (or, NON_STRICT, names the wrong rule) has one cause: what it is about (the rule its input breaks,
+A case that fails (or, NON_STRICT, names the wrong rule or falls short of a SHOULD) has one cause: what it is about (the rule its input breaks,
 the implementation-defined class it belongs to; else "valid input", whatever value class it exercises, since one
 defect fails valid cases of many classes, or the family of a case of another kind, the third segment of its id) and
 what went wrong with it (accepted what breaks the rule, a check that fails, a crash); a capture's or a log's case
@@ -101,12 +101,16 @@ def cause_of(case, data: dict | None = None) -> tuple[str, str] | None:
     if len(parts) > 3 and parts[2] == "capture" and parts[3] in RECORDED:  # what recorded traffic or a log holds
         what = key if key.startswith("rule:") else parts[3] + ("/" + parts[4] if len(parts) > 4 else "")
         return f"recorded/{what}", (f"recorded {RECORDED[parts[3]]} that break {words}" if key.startswith("rule:")
-                                    else f"recorded {RECORDED[parts[3]]} that fail {parts[-1]}")
+                                    else f"recorded {RECORDED[parts[3]]} that fall short of a SHOULD: {parts[-1]}"
+                                    if verdict is Verdict.NON_STRICT else f"recorded {RECORDED[parts[3]]} that fail "
+                                    f"{parts[-1]}")
     did = "+".join(ops(case)[:SHOWN_IN_TITLE]) or "the case"
     if verdict in VERBS:
         return f"{verdict.value.lower()}/{did}/{key}", f"{VERBS[verdict]} {did}: {words}"
-    if verdict is Verdict.NON_STRICT:
+    if verdict is Verdict.NON_STRICT and key.startswith("rule:"):  # an input breaking a rule, refused for another
         return f"names-another-rule/{key}", f"refuses, but names another rule than it breaks: {words}"
+    if verdict is Verdict.NON_STRICT:  # behaviour: what a SHOULD asks, not done
+        return f"should/{did}/{key}", f"{did} falls short of a SHOULD: {words}"
     if key.startswith("rule:"):
         action = "accepts" if did in ("decode", "roundtrip") else "encodes" if did == "encode" else f"{did} passes"
         return f"accepts/{key}", f"{action} what breaks {words}"

@@ -9,14 +9,10 @@ import shlex
 from ..core.causes import Cause
 from ..core.results import INTERRUPTED, CaseResult, RunResult
 from ..core.verdicts import ATTENTION, UNTESTED, Verdict
+from ..wording import counted
 
 VERDICTS = tuple(Verdict)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
-
-def counted(n: int, noun: str) -> str:
-    """``1 case``, ``2 cases``: a count with its noun in the right number."""
-    return f"{n} {noun if n == 1 else noun + 's'}"
-
 
 def overall(result: RunResult) -> str:
     """PASS, FAIL, ERROR (an adapter error), INCONCLUSIVE (nothing could be tested) or INCOMPLETE (interrupted),

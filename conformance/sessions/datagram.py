@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Iterable, Iterator, Protocol
 
+from ..capture.outside import Outside
 from ..capture.recording import OWN, RECEIVED
 from ..core.results import Incident
 from ..core.session import Answer, Job
@@ -90,6 +91,7 @@ class DatagramSession:
         self.gone: str | None = None  # why the target is taken for gone now (the peer's liveness), or None
         self.incidents: list[Incident] = []  # each time it was, with the cases decided then
         self.conductor: Conductor | None = None
+        self.outside = Outside()  # sound frames of messages outside the suite (a vehicle's other traffic), counted
 
     def hello(self) -> dict:
         return self._hello
@@ -151,19 +153,7 @@ class DatagramSession:
         if got is not None:
             arrived, data, source = got
             self._record(arrived, tuple(source), tuple(self.transport.address[:2]), data, RECEIVED)
-            parsed = self.wire.parse(data)
-            self._losses(arrived, conductor, poll=False)
-            impostor = self.peer.impostor(parsed)
-            if impostor is not None:
-                self._impostor(arrived, conductor, impostor)
-            if parsed.decoded is not None and not self.peer.own(parsed):
-                self.heard += 1
-            self.peer.observe(arrived, parsed, tuple(source) == tuple(self.transport.target[:2]))
-            if conductor is not None and self.peer.accepts(parsed):
-                self._transmit(conductor.deliver(arrived, parsed))
-                for why in conductor.impostors:
-                    if why not in self.impostors:
-                        self.impostors.append(why)
+            self._received(arrived, data, source, conductor)
         if conductor is not None and conductor.deadline is not None and conductor.deadline <= t:
             self._losses(t, conductor, poll=True)  # before a step is judged, whatever the kernel dropped since
             if not self.heard:
@@ -172,6 +162,26 @@ class DatagramSession:
             self._liveness(t, conductor)
             self._transmit(conductor.wake(t))
         self._send(self.peer.due(t))
+
+    def _received(self, arrived: float, data: bytes, source: tuple, conductor: Conductor | None) -> None:
+        """Parse a datagram and hand it to the peer and the scenarios; a sound frame of a message outside the suite
+        (a vehicle's other traffic) is counted, its framing checked, and judged no further."""
+        parsed = self.wire.parse(data)
+        self._losses(arrived, conductor, poll=False)
+        if parsed.outside is not None:
+            self.outside.add(parsed.outside, parsed.undefined)
+            return
+        impostor = self.peer.impostor(parsed)
+        if impostor is not None:
+            self._impostor(arrived, conductor, impostor)
+        if parsed.decoded is not None and not self.peer.own(parsed):
+            self.heard += 1
+        self.peer.observe(arrived, parsed, tuple(source) == tuple(self.transport.target[:2]))
+        if conductor is not None and self.peer.accepts(parsed):
+            self._transmit(conductor.deliver(arrived, parsed))
+            for why in conductor.impostors:
+                if why not in self.impostors:
+                    self.impostors.append(why)
 
     def _liveness(self, t: float, conductor: Conductor) -> None:
         """Tell the scenarios when the target is gone (the peer says why), so that what waits on it is decided then
@@ -226,6 +236,7 @@ class DatagramSession:
         """What the report should say about the link."""
         out = list(getattr(self.peer, "notes", [])) + list(getattr(self.transport, "notes", []))
         out += [f"the session's own announce or heartbeat: {why}" for why in self.unsent[:3]]
+        out += self.outside.notes(getattr(self.wire, "outside_judged", "judged no further"))
         if not self.heard:
             out.append(f"no valid frame ever came from {self.name}: check the address and port")
         if self.drops:

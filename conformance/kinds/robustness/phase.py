@@ -103,7 +103,8 @@ def as_scenario(case: dict) -> dict:
         steps = [{"id": "alive", "alive": probe["alive"], "within": probe["within"]}]
     else:
         steps = [{"id": "probe", "send": probe["send"], "encoding": probe.get("encoding", "le")},
-                 {"id": "reply", "expect": probe["expect"], "reply_to": "probe", "within": probe["within"]}]
+                 {"id": "reply", "expect": probe["expect"], "reply_to": "probe", "within": probe["within"]}
+                 | ({"queued": probe["queued"]} if "queued" in probe else {})]
     if "covers" in case:
         steps[-1]["covers"] = case["covers"]
     return dict(case, steps=steps)
@@ -153,6 +154,8 @@ class PhaseMachine:
         self.restart_wanted = False
         self.waiting: _Wait | None = None
         self.impairments: list[str] = []  # what the link could not show, in order
+        self.replayed: list[Frame] = []  # the frames replayed since the last round (a queueing node works them off)
+        self.requests_in: dict[bytes, str | None] = {}  # a replayed frame -> the exchange it opens as a request
         self._script = None
 
     # ------------------------------------------------------------------ driving the script
@@ -355,6 +358,7 @@ class PhaseMachine:
             data = frame.data if frame.addressed else self.wire.readdress(frame.data, frame.encoding, source, self._node())
             yield _Send(Composed(data, {}, "", frame.encoding))
             yield _Wait(self.now + pace)
+        self.replayed = frames
         yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
 
     def _bisect(self, block: list[Frame], probes: list[Probe]):
@@ -388,6 +392,8 @@ class PhaseMachine:
         the probes that got none."""
         waiting, until, attempt = {id(p): p for p in probes}, self.now + patience, 0
         tries = dict.fromkeys(waiting, 0)
+        queues = {id(p): self._queue(p.program.case["probe"], self.replayed) for p in probes}
+        self.replayed = []
         impaired = len(self.impairments)
         while waiting:
             attempt += 1
@@ -400,7 +406,8 @@ class PhaseMachine:
                 accepts, composed = self._ask(probe, spec)
                 if composed is not None:
                     yield _Send(composed)
-                asked[id(probe)] = (probe, accepts, self.now + self._scaled(seconds(spec["within"], self.phase.bounds)))
+                wait = self._bound(spec, queues[id(probe)] if attempt == 1 else None)
+                asked[id(probe)] = (probe, accepts, self.now + self._scaled(wait))
             if not asked:
                 break
             while asked:
@@ -418,11 +425,53 @@ class PhaseMachine:
         for key, probe in waiting.items():
             spec = probe.program.case["probe"]
             self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within "
-                               f"{seconds(spec['within'], self.phase.bounds):g} s "
-                               f"({tries[key]} tries)" + (f"; not judged: {blind}" if blind else ""), probe)
+                               f"{self._said(spec, queues[key])} ({tries[key]} tries)"
+                      + (f"; not judged: {blind}" if blind else ""), probe)
             if blind:
                 probe.blind = probe.blind or f"{when}: {blind}"
         return [] if blind else list(waiting.values())
+
+    def _queue(self, spec: dict, frames: list[Frame]) -> int:
+        """How many of the frames just replayed are requests of the probe's own exchange, which a node may queue
+        and work off one at a time before it answers the probe (the probe's ``queued`` bound each); 0 for a probe
+        without one."""
+        if "queued" not in spec or "send" not in spec:
+            return 0
+        wanted = self._exchange_of(spec)
+        count = 0
+        for frame in frames:
+            key = frame.data
+            if key not in self.requests_in:
+                parsed = self.wire.parse(frame.data)
+                exchange = None if parsed.decoded is None else exchange_for(
+                    self.phase.exchanges, self.wire, {"abbrev": parsed.message, "fields": parsed.fields}, self.phase.edition)
+                self.requests_in[key] = exchange and exchange["id"]
+            count += wanted is not None and self.requests_in[key] == wanted
+        return count
+
+    def _exchange_of(self, spec: dict) -> str | None:
+        scope = Scope(dict(self.phase.params), lambda name: 0, self.epoch, addresses=self.addressing.symbols())
+        try:
+            message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
+        except Unresolved:
+            return None
+        exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
+        return exchange and exchange["id"]
+
+    def _bound(self, spec: dict, queued: int | None) -> float:
+        """A probe's wait, in unscaled seconds: its own bound, and on its first try its ``queued`` bound for each
+        request of its kind the node may still be working off."""
+        own = seconds(spec["within"], self.phase.bounds)
+        return own + queued * seconds(spec["queued"], self.phase.bounds) if queued else own
+
+    def _said(self, spec: dict, queued: int) -> str:
+        own = seconds(spec["within"], self.phase.bounds)
+        if not queued:
+            return f"{own:g} s"
+        each = seconds(spec["queued"], self.phase.bounds)
+        return (f"{own + queued * each:g} s ({own:g} s, and {each:g} s for each of the {queued} "
+                f"request{'s' if queued != 1 else ''} of its kind just replayed, which a node may queue: bound "
+                f"{spec['queued']})")
 
     def _ask(self, probe: Probe, spec: dict):
         """(what accepts the reply, the request to send or None) for one try of a probe."""

@@ -26,16 +26,21 @@ def selected(wire, message: str, fields: dict, when: dict, edition: str) -> bool
 
 
 def silence_allowed(wire, exchange: dict, request: dict, edition: str, facts: dict | None = None,
-                    everywhere=()) -> str | None:
+                    everywhere=(), unended: bool = False) -> str | None:
     """The ambiguity under which the seeds define no reply to this request (a rule of the exchange's ``silence``,
     or of ``everywhere``: the rules for every exchange), or None. A rule selects requests by their fields (``when``,
     ``null``) and by ``facts`` about them: the fields naming a system nobody answers for (``nobody``), the fields
-    whose value an earlier request of the exchange still carries (``reuses``), and where the request was addressed
-    (``to``: "elsewhere", neither the node nor anyone)."""
+    whose value an earlier request of the exchange still carries (``reuses``), the fields whose value a later
+    request carries that was answered (``reused``: it may have replaced this one), and where the request was addressed
+    (``to``: "elsewhere", neither the node nor anyone). ``unended``: the rules under which a request may also be
+    left without its end (its replies stop before a terminal state), those marked ``unended``."""
     facts = facts or {}
     message = exchange["request"]["message"]
     for rule in (*exchange.get("silence", ()), *everywhere):
+        if unended and not rule.get("unended"):
+            continue
         if (selected(wire, message, request, rule.get("when", {}), edition)
+                and ("reused" not in rule or rule["reused"] in facts.get("reused", ()))
                 and ("null" not in rule or request.get(rule["null"]) is None)
                 and ("nobody" not in rule or rule["nobody"] in facts.get("nobody", ()))
                 and ("reuses" not in rule or rule["reuses"] in facts.get("reuses", ()))

@@ -116,6 +116,7 @@ class _Step:
     bound: float | None = None  # when the step's own time is up (a quiet period after a terminal state may move until)
     open_end: str | None = None  # the ambiguity id when the sequence's last state is one the seeds leave open
     readings: dict = field(default_factory=dict)  # ambiguity id -> what the node did that the seeds leave open
+    silences: set = field(default_factory=set)  # the readings among them that are a request's silence
     states: tuple = ()  # (the States of its replies, or None), once worked out
     seen: set = field(default_factory=set)  # what it took, to tell the link's byte-identical copies
 
@@ -685,8 +686,13 @@ class Machine:
                             for r in step.replies)
         level = weaker(spec.get("level", "MUST"), states.level)
         if step.terminal is None:
-            self._find(step, "terminal", False, f"no terminal state within {bound} s ({trail})", level, states.clause,
-                       blind=self._blind(step))
+            what = f"no terminal state within {bound} s ({trail})"
+            reading = self._silence_reading(step, unended=True)
+            if reading is not None:  # a request a later one may have replaced: its end is not owed
+                self._read(step, reading, what)
+                step.silences.add(reading)
+            else:
+                self._find(step, "terminal", False, what, level, states.clause, blind=self._blind(step))
         else:
             if step.open_end is not None:
                 self._read(step, step.open_end, f"ended in {self._terminal_name(step)}: read as the end of the request")
@@ -721,18 +727,27 @@ class Machine:
         """Where the register reads silence as allowed (the exchange's ``silence`` for the request, or the rules for
         every request, or the step's ``if_silent`` where it awaits no reply), the lack of a reply is noted as that
         reading, not failed (unless the session could not see everything: then it is not judged)."""
-        ambiguity = step.spec.get("if_silent")
+        ambiguity = self._silence_reading(step)
+        if ambiguity is None:
+            return False
+        self._read(step, ambiguity, what)
+        step.silences.add(ambiguity)
+        self._readings(step)
+        return True
+
+    def _silence_reading(self, step: _Step, unended: bool = False) -> str | None:
+        """The reading under which the step's request may go unanswered (``unended``: may be left without its end),
+        or None; None too where the session could not see everything."""
+        ambiguity = None if unended else step.spec.get("if_silent")
         exchange = self._exchange(step)
         if exchange is not None:
             ref = step.spec["reply_to"]
             request = self.sent[ref].decoded.get("fields", {})
             ambiguity = silence_allowed(self.wire, exchange, request, self.edition, self._facts(ref, exchange),
-                                        self.program.silence)
+                                        self.program.silence, unended)
         if ambiguity is None or self._blind(step) is not None or self.suspect:
-            return False
-        self._read(step, ambiguity, what)
-        self._readings(step)
-        return True
+            return None
+        return ambiguity
 
     def _facts(self, ref: str, exchange: dict) -> dict:
         """What the silence rules may select a request by, beyond its fields: the fields naming a system nobody
@@ -746,18 +761,28 @@ class Machine:
                    if order.index(s) < order.index(ref) and self._exchange_of(s) is exchange]
         reuses = {r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"
                   and any(same(e.get(r["request_field"]), sent.get(r["request_field"])) for e in earlier)}
+        answered = {p for p in (self._answered_step(r) for r in self.backlog) if p is not None} | {
+            s for s, n in self.answers.items() if n}
+        later = [self.sent[s].decoded.get("fields", {}) for s in self.sent if s in answered
+                 and order.index(s) > order.index(ref) and self._exchange_of(s) is exchange]
+        reused = {r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"
+                  and any(same(e.get(r["request_field"]), sent.get(r["request_field"])) for e in later)}
         composed = self.sent[ref]
         to = self.wire.destination(Parsed(composed.data, composed.message, composed.decoded))
         elsewhere = to is not None and to[0] not in (self.addressing.node, self.wire.anyone)
-        return {"nobody": nobody, "reuses": reuses, "to": "elsewhere" if elsewhere else None}
+        return {"nobody": nobody, "reuses": reuses, "reused": reused, "to": "elsewhere" if elsewhere else None}
 
     def _readings(self, step: _Step) -> None:
-        """One INFO check per open reading the step met: never a failure, always in the report."""
+        """One check per open reading the step met, always in the report: INFO, never a failure; or, for a request's
+        silence where the register's entry is a SHOULD (the seeds define a reply for the case without requiring it),
+        a SHOULD not met."""
         for ambiguity, what in step.readings.items():
             entry = self.program.ambiguities.get(ambiguity, {})
             reading = f": {entry['suite']}" if "suite" in entry else ""
-            self._find(step, f"reading-{ambiguity}", True, f"{what} (open reading {ambiguity}{reading})", "INFO",
-                       entry.get("clause"))
+            should = ambiguity in step.silences and entry.get("level") == "SHOULD"
+            self._find(step, f"reading-{ambiguity}", not should,
+                       f"{what} ({'register entry' if should else 'open reading'} {ambiguity}{reading})",
+                       "SHOULD" if should else "INFO", entry.get("clause"))
 
     # ------------------------------------------------------------------ helpers
 

@@ -56,8 +56,9 @@ class PassiveExchanges:
     timing bounds, which exchanges name; ``silence``: the rules under which any request may go unanswered."""
 
     def __init__(self, wire, exchanges: list[dict], edition: str, scale: float = 1.0, anyone: int | None = None,
-                 bounds: dict | None = None, nobody: int | None = None, silence=()):
+                 bounds: dict | None = None, nobody: int | None = None, silence=(), ambiguities: dict | None = None):
         self.wire, self.anyone, self.edition, self.bounds = wire, anyone, edition, bounds or {}
+        self.ambiguities = ambiguities or {}  # id -> the register's entry: a SHOULD entry's silence is NON_STRICT
         self.nobody, self.silence = nobody, tuple(silence)
         self.state_cache: dict[tuple, States] = {}
         self.rules = [self._resolve(ex, edition, scale) for ex in exchanges]
@@ -284,24 +285,51 @@ class PassiveExchanges:
                 return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
                                       f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
-            facts = {"to": "elsewhere" if o.request.dst == self.nobody else None}
-            silent = silence_allowed(self.wire, ex, o.request.fields, self.edition, facts, self.silence)
-            if silent is not None:  # the seeds define no reply to this request: an open reading, never a failure
-                return [self._finding(o, f"reading/{silent}", Verdict.IMPL_DEFINED, ex["clause"],
-                                      f"no {ex['reply']} {self._between(o)} within {bound:g} s (open reading {silent})",
-                                      o.request)]
+            silent = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence)
+            if silent is not None:  # the seeds require no reply to this request: a reading, never a failure
+                return [self._reading(o, silent, f"no {ex['reply']} {self._between(o)} within {bound:g} s")]
             return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
                                   f"no {ex['reply']} {self._between(o)} within {bound:g} s", o.request)]
         self.ended[id(o.rule)].append(o)
         if o.states is not None and o.terminal is None:
-            return [self._finding(o, "terminal", LEVELS[weaker(ex["level"], o.states.level)], o.states.clause,
-                                  f"no terminal {ex['reply']} within {bound:g} s", o.request)]
+            what = f"no terminal {ex['reply']} within {bound:g} s"
+            unended = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence,
+                                      unended=True)
+            if unended is not None:  # a later request reusing its identifier may have replaced it
+                return [self._reading(o, unended, what)]
+            return [self._finding(o, "terminal", LEVELS[weaker(ex["level"], o.states.level)], o.states.clause, what,
+                                  o.request)]
         if o.open_end is not None:  # it ended in a state the seeds leave open: the reading, shown
             named = self._name(o.terminal.message, o.states.field, o.terminal.fields.get(o.states.field))
             return [self._finding(o, f"reading/{o.open_end}", Verdict.IMPL_DEFINED, o.states.clause,
                                   f"ended in {o.states.field}={named}: read as the end of the request "
                                   f"(open reading {o.open_end})", o.terminal)]
         return []
+
+    def _facts(self, o: _Open) -> dict:
+        """What the silence rules may select an unanswered request by, as a capture shows it: where it was addressed,
+        and (for exchanges whose rules ask) its echoed fields whose value an earlier request of the same requester to
+        the same node carries (``reuses``) or a later one that was answered (``reused``: it may have replaced it)."""
+        facts = {"to": "elsewhere" if o.request.dst == self.nobody else None}
+        ex = o.rule.exchange
+        if not any("reuses" in r or "reused" in r for r in ex.get("silence", ())):
+            return facts
+        rid, mine = id(o.rule), o.request
+        others = [p for p in (*self.open[rid], *self.ended[rid]) if p is not o
+                  and p.request.src == mine.src and p.request.dst == mine.dst]
+        for fact, chosen in (("reuses", [p for p in others if p.request.number < mine.number]),
+                             ("reused", [p for p in others if p.request.number > mine.number and p.answered])):
+            facts[fact] = {e["request_field"] for e in o.rule.echoes if any(
+                same(p.request.fields.get(e["request_field"]), mine.fields.get(e["request_field"])) for p in chosen)}
+        return facts
+
+    def _reading(self, o: _Open, ambiguity: str, what: str) -> Finding:
+        """A request's silence the register reads: IMPL_DEFINED (an open reading), or NON_STRICT where the entry is a
+        SHOULD (the seeds define a reply for the case without requiring it)."""
+        should = self.ambiguities.get(ambiguity, {}).get("level") == "SHOULD"
+        return self._finding(o, f"reading/{ambiguity}", Verdict.NON_STRICT if should else Verdict.IMPL_DEFINED,
+                             o.rule.exchange["clause"],
+                             f"{what} ({'register entry' if should else 'open reading'} {ambiguity})", o.request)
 
     # ------------------------------------------------------------ shared
 

@@ -48,7 +48,9 @@ class Parsed:
     ``decoded``: its decoded form (``fields``, and ``header`` where the protocol has one) if well formed;
     ``problem`` and ``clause``: why it is malformed and the rule it breaks; ``undecided``: ``problem`` says why
     the suite could not judge it (a bound it keeps), not what it breaks; ``addressed``: (system, entity) a frame
-    that did not decode is addressed to, where its header could still be read."""
+    that did not decode is addressed to, where its header could still be read. ``outside``: a sound frame (its
+    framing checked) of a message outside the suite's definitions, named (its name or id): judged no further, only
+    counted; ``undefined``: no definition the suite has names its id at all (a node on a newer protocol)."""
 
     data: object
     message: str | None
@@ -58,6 +60,8 @@ class Parsed:
     encoding: str | None = None
     undecided: bool = False
     addressed: tuple | None = None
+    outside: str | None = None
+    undefined: bool = False
 
     @property
     def fields(self) -> dict:

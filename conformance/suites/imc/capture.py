@@ -16,7 +16,7 @@ from ...kinds.vector.errors import FrameError, NotJudged
 from . import codec
 from .crc16 import arc  # fastcrc's, called without the wrapper: this is the hot path
 from .definitions import Definitions
-from .wire import NOT_JUDGED_CLAUSE, UNKNOWN_SYSTEM, ImcWire
+from .wire import NOT_JUDGED_CLAUSE, UNKNOWN_SYSTEM, ImcWire, outside
 
 PORTS = frozenset([*range(6001, 6031), *range(30100, 30105)])  # DUNE's node ports and its discovery ports
 SEEN_LIMIT = 1 << 16  # decoded payloads remembered (repeated statuses and requests decode once)
@@ -31,7 +31,7 @@ HEADER_SIZE, FOOTER_SIZE = codec.HEADER_SIZE, codec.FOOTER_SIZE
 
 class ImcCaptureRules:
     ports = PORTS
-    outside = "framing checked only"
+    outside = ImcWire.outside_judged
 
     def __init__(self, defs: Definitions, wire: ImcWire, rules: list[dict], behaviour: dict | None):
         self.defs, self.wire, self.behaviour = defs, wire, behaviour
@@ -49,7 +49,8 @@ class ImcCaptureRules:
                      if ex["request"]["message"] in known and ex["reply"] in known]
         behaviour = self.behaviour or {}
         tracker = PassiveExchanges(self.wire, exchanges, edition, scale, UNKNOWN_SYSTEM, behaviour.get("bounds"),
-                                   nobody=0, silence=behaviour.get("silence", ()))  # 0: DUNE's Announce goes to it
+                                   nobody=0, silence=behaviour.get("silence", ()),  # 0: DUNE's Announce goes to it
+                                   ambiguities=behaviour.get("ambiguities"))
         self.watched = {self.defs[m].id for m in tracker.messages}
         return tracker
 
@@ -73,8 +74,8 @@ class ImcCaptureRules:
         if group is None:  # a message the suite does not cover: its framing is judged, not its fields
             if not sound or mgid == self.defs.null_id:
                 return self._decoded(p, UNIDENTIFIED)
-            known = self.defs.by_id.get(mgid)
-            return Frame(None, outside=known.abbrev if known else f"id {mgid}")
+            name, undefined = outside(self.defs, mgid)
+            return Frame(None, outside=name, undefined=undefined)
         if not sound:
             return self._decoded(p, group)
         src, _, dst = ADDRESSING[order].unpack_from(p, 14)

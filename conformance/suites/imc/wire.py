@@ -16,9 +16,20 @@ DATAGRAM_LIMIT = 65507  # bytes an IPv4 UDP datagram carries
 NOT_JUDGED_CLAUSE = "imc-wire#field-types"  # what a frame the reference codec does not judge is about (inline messages)
 
 
+def outside(defs: Definitions, mgid: int) -> tuple[str, bool]:
+    """(its name in reports, whether no definition names it) for a sound frame whose message id the definitions
+    lack: a vehicle's other traffic (an id IMC.xml defines: ``ids_elsewhere``), or an id no IMC.xml the suite has
+    defines (a newer protocol, a private message). Both are judged no further than their framing."""
+    mdef = defs.by_id.get(mgid)
+    if mdef is not None:
+        return mdef.abbrev, False
+    return f"id {mgid}", mgid not in defs.ids_elsewhere
+
+
 class ImcWire:
     transport = "datagram"
     anyone = UNKNOWN_SYSTEM  # 0xFFFF: unknown, or anyone (imc-wire.md, defaults)
+    outside_judged = "framing checked only"  # what is judged of a frame of a message outside the suite
 
     def __init__(self, defs: Definitions, rule_clauses: dict[str, str]):
         self.defs, self.rule_clauses = defs, rule_clauses
@@ -39,6 +50,10 @@ class ImcWire:
         try:
             decoded = codec.decode(self.defs, data)
         except FrameError as exc:
+            mgid = self.id_in_header(data) if exc.rule == "unknown-id" else None
+            if mgid is not None and mgid != self.defs.null_id:  # sound (decode checks the CRC first), not ours
+                name, undefined = outside(self.defs, mgid)
+                return Parsed(data, None, encoding=codec.byte_order_of(data), outside=name, undefined=undefined)
             return Parsed(data, self.named_in_header(data), None, f"{exc.rule} at byte {exc.offset}: {exc.detail}",
                           self.rule_clauses.get(exc.rule), codec.byte_order_of(data),
                           addressed=self.addressed_in_header(data))
@@ -109,12 +124,18 @@ class ImcWire:
                 out.append(frame)
         return out
 
-    def named_in_header(self, data: bytes) -> str | None:
-        """The message a frame's header names, if it can be read (even when the frame is malformed)."""
+    def id_in_header(self, data: bytes) -> int | None:
+        """The message id a frame's header holds, if it can be read (in the byte order its sync names)."""
         order = codec.byte_order_of(data)
         if order is None or len(data) < 4:
             return None
-        (mgid,) = struct.unpack_from(codec.ORDERS[order] + "H", data, 2)
+        return struct.unpack_from(codec.ORDERS[order] + "H", data, 2)[0]
+
+    def named_in_header(self, data: bytes) -> str | None:
+        """The message a frame's header names, if it can be read (even when the frame is malformed)."""
+        mgid = self.id_in_header(data)
+        if mgid is None:
+            return None
         mdef = self.defs.by_id.get(mgid)
         return mdef.abbrev if mdef is not None and not mdef.auxiliary else None
 

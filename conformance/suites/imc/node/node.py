@@ -45,6 +45,13 @@ MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
 LOSS_RUN = 2  # at most this many datagrams of one message dropped in a row by ``loss``
 SLOW_TURNAROUND = 4.0  # s a peer's modem takes to answer under the busy-then-completes variant
+# vehicle-traffic: (message id, payload, byte order, every how many 0.2 s ticks) of messages outside the seeds, as a
+# DUNE vehicle streams them (IMC.xml 5.4: EstimatedState's 20 fields, EntityState, CpuUsage, EulerAngles, Temperature),
+# and an id no IMC.xml defines (999: a newer or private message)
+TRAFFIC_TICK = 0.2
+TRAFFIC = ((350, bytes(88), "<", 1), (1, bytes([1, 0]) + struct.pack("<H", 6) + b"Active", "<", 1),
+           (7, bytes([12]), "<", 1), (254, bytes(40), "<", 5), (263, struct.pack(">f", 14.5), ">", 5),
+           (999, b"\x01\x02\x03", "<", 5))
 
 
 class ReferenceNode:
@@ -65,6 +72,7 @@ class ReferenceNode:
         self.exchanges = behaviour["exchanges"]
         self.own_only = {m for c in only_to_itself for m in capabilities[c]["requests"]}  # served to itself alone
         self.turnaround = SLOW_TURNAROUND if variant == "busy-then-completes" else TURNAROUND
+        self.acoustic_timeout = behaviour["bounds"]["acoustic-queue"]["seconds"]  # each queued operation's, at most
         self.address, self.name, self.system = address, name, system
         self.peers = dict(peers if peers is not None else {"imc-peer-1": 150.0, "imc-peer-2": 1200.0})
         self.loss, self.dup, self.rng, self.broken, self.epoch0 = loss, dup, random.Random(seed), broken, epoch0
@@ -79,7 +87,7 @@ class ReferenceNode:
         self.beacons: list = []
         self.groups: dict[str, object] = {}  # SystemGroup: group name -> its list of systems
         self.kept: list[dict] = []  # RemoteCommands kept for resending
-        self.requests: dict[int, tuple[int, float]] = {}  # AcousticRequest req_id -> (its tag, when it ends)
+        self.requests: dict[int, tuple] = {}  # AcousticRequest req_id -> (its tag, when it ends, it, its end state)
         self.cancelled: set[int] = set()  # tags of queued frames not to send (reused-id-cancels)
         self.queries: deque = deque()  # when the latest HistoricDataQueries came (drops-when-many, exhausted-by-many)
         self.dropped_ids: set[int] = set()  # the req_ids of the QUERYs dropped (drops-when-many)
@@ -89,13 +97,14 @@ class ReferenceNode:
         self.dropped = 0  # datagrams that did not decode
         self.unjudged = 0  # frames beyond the reference codec's bounds (nested too deep), dropped as well
         self.next_beat = self.next_announce = None
+        self.next_traffic, self.ticks = None, 0  # vehicle-traffic
 
     # ------------------------------------------------------------------ the caller's interface
 
     @property
     def deadline(self) -> float | None:
         times = [self.queue[0][0]] if self.queue else []
-        times += [x for x in (self.next_beat, self.next_announce) if x is not None]
+        times += [x for x in (self.next_beat, self.next_announce, self.next_traffic) if x is not None]
         return min(times, default=None)
 
     def receive(self, t: float, data: bytes, source: tuple) -> None:
@@ -159,6 +168,9 @@ class ReferenceNode:
         if self.next_announce is not None and self.next_announce <= t:
             self.next_announce = t + (60.0 if self.variant == "slow-announce" else 10.0)
             out += [(addr, self._announce(t)) for addr in self.contacts.values()]
+        if self.next_traffic is not None and self.next_traffic <= t:
+            self.next_traffic, self.ticks = t + TRAFFIC_TICK, self.ticks + 1
+            out += [(addr, frame) for frame in self._traffic(t) for addr in self.contacts.values()]
         while self.queue and self.queue[0][0] <= t:
             _, _, dest, data, tag = heapq.heappop(self.queue)
             if tag not in self.cancelled:
@@ -187,6 +199,8 @@ class ReferenceNode:
                 if self.variant != "slow-announce":
                     self._later(t, PROCESSING, address, self._announce(t))
                 self.next_beat = t if self.next_beat is None else self.next_beat
+                if self.variant == "vehicle-traffic" and self.next_traffic is None:
+                    self.next_traffic = t
                 self.next_announce = t + period if self.next_announce is None else self.next_announce
             return
 
@@ -264,6 +278,9 @@ class ReferenceNode:
         if distance is None and self.variant == "silent-to-unknown-systems":
             return  # it cannot route the request
         if t < self.modem_free_at:
+            if self.variant == "queues-operations":  # carried out once the operations before it are done
+                self._on_AcousticOperation(self.modem_free_at, message)
+                return
             state(PROCESSING, "BUSY")
             if self.variant == "busy-then-completes":
                 self._on_AcousticOperation(self.modem_free_at, message)
@@ -281,6 +298,8 @@ class ReferenceNode:
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
         travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + self.turnaround
+        if distance is None and self.variant == "queues-operations":  # no answer: it gives up at its acoustic timeout
+            travel = float(self.acoustic_timeout)
         self.modem_free_at = t + travel
         if self.variant == "queued-first" and progress == "MSG_IP":
             state(PROCESSING / 2, "MSG_QUEUED")
@@ -303,8 +322,8 @@ class ReferenceNode:
         echoed_type = self._v("AcousticStatus", "type", "MSG") if self.broken == "type-not-echoed" else f["type"]
         req_id = (f["req_id"] + 1) % 0x10000 if self.broken == "req-id-not-echoed" else f["req_id"]
         tag, previous = next(self.order), self.requests.get(f["req_id"])
-        if previous is not None and previous[1] > t and self.broken == "reused-id-cancels":
-            self.cancelled.add(previous[0])  # the outstanding request with this id says nothing more
+        if previous is not None and previous[1] > t and self._reused(t, message, previous):
+            return
 
         def status(delay: float, name: str, range_: float = 0.0, info: str = "") -> None:
             fields = {"req_id": req_id, "type": echoed_type, "status": self._status(name), "info": info, "range": range_}
@@ -336,7 +355,8 @@ class ReferenceNode:
         if self.broken == "ignores-timeout":
             travel += timeout + 2.0
         self.modem_free_at = t + travel
-        self.requests[f["req_id"]] = (tag, t + travel)
+        final = "RANGE_RECEIVED" if "RANGE" in kind else "SENT"
+        self.requests[f["req_id"]] = (tag, t + travel, message, final, float(distance) if "RANGE" in kind else 0.0)
         if self.variant == "queued-first":
             status(PROCESSING / 2, "QUEUED")
         status(PROCESSING, "IN_PROGRESS")
@@ -346,7 +366,6 @@ class ReferenceNode:
             self.modem_free_at = t + timeout
             status(timeout, "INPUT_FAILURE", info="timed out")
             return
-        final = "RANGE_RECEIVED" if "RANGE" in kind else "SENT"
         if final == "RANGE_RECEIVED" and self.variant == "sent-before-range-received":
             status(travel / 2, "SENT")
         status(travel, final, float(distance) if final == "RANGE_RECEIVED" else 0.0)
@@ -355,11 +374,39 @@ class ReferenceNode:
         elif self.broken == "two-terminals":
             status(travel + 0.1, "ERROR", info="second final status")
 
+    def _reused(self, t: float, message: dict, previous: tuple) -> bool:
+        """A request reusing the req_id of an outstanding one: whether it is dealt with here (not carried out as a
+        request of its own). The seeds leave it open: it may replace the first (reused-id-replaces) or cancel it
+        (reused-id-cancels); broken, it crosses the two (the first's end reported with the second's type) or stops
+        the node's acoustic service."""
+        first_tag, end, first, final, range_ = previous
+        if self.variant in ("reused-id-replaces", "reused-id-cancels") or self.broken in ("reused-id-crossed",
+                                                                                         "dies-on-reused-id"):
+            self.cancelled.add(first_tag)  # the first says nothing more of itself
+            self.modem_free_at = t
+        if self.broken == "dies-on-reused-id":
+            self.acoustic_dead = True
+            return True
+        if self.variant == "reused-id-cancels":  # the first ends now, in a failure; the second is not carried out
+            fields = {"req_id": first["fields"]["req_id"], "type": first["fields"]["type"], "status": self._status("ERROR"),
+                      "info": "cancelled: a request reused its id", "range": 0.0}
+            self._reply(t, PROCESSING, first, "AcousticStatus", fields, entity=ACOUSTIC_ENTITY)
+            return True
+        if self.broken == "reused-id-crossed":  # the first's end, reported under the second's type
+            self.modem_free_at = end
+            fields = {"req_id": first["fields"]["req_id"], "type": message["fields"]["type"],
+                      "status": self._status(final), "info": "", "range": range_}
+            self._reply(t, end - t, first, "AcousticStatus", fields, entity=ACOUSTIC_ENTITY)
+            return False
+        return False
+
     def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
         req_id = message["fields"]["req_id"]
         req_id = (req_id + 1) % 0x10000 if self.broken == "req-id-not-echoed" else req_id
-        late = message["fields"]["ttl"] + 2.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
+        late = message["fields"]["ttl"] + 4.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
         states = ((PROCESSING, "QUEUED"), (0.2 + late, "TRANSMIT"), (0.5 + late, "OK"))
+        if self.variant == "slow-iridium-link":  # sent before a ttl of 2 s, its OK 1.8 s after it
+            states = ((PROCESSING, "QUEUED"), (1.9, "TRANSMIT"), (3.8, "OK"))
         for delay, name in states[::2] if self.broken == "late-ok" else states:
             fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": ""}
             self._reply(t, delay, message, "IridiumTxStatus", fields)
@@ -500,6 +547,17 @@ class ReferenceNode:
         return frame
 
     # ------------------------------------------------------------------ helpers
+
+    def _traffic(self, t: float) -> list[bytes]:
+        """The frames of its other traffic due at this tick (vehicle-traffic), to anyone: messages the seeds do not
+        define, so built from their ids and payloads."""
+        out = []
+        for mgid, payload, e, every in TRAFFIC:
+            if self.ticks % every == 0:
+                body = struct.pack(e + "HHHdHBHB", self.defs.sync, mgid, len(payload), self.epoch0 + t, self.system, 0,
+                                   UNKNOWN_SYSTEM, UNKNOWN_ENTITY) + payload
+                out.append(body + struct.pack(e + "H", crc16(body)))
+        return out
 
     def _lost(self, message: dict, reply: bool = False) -> bool:
         """Drop at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``

@@ -1,0 +1,99 @@
+"""A real vehicle's other traffic (messages outside the suite, ids no IMC.xml has) beside the messages under test:
+live runs, recorded runs judged by ``pcap``, and logs check its framing and judge it no further, a note counting it,
+never a failure; a frame whose framing is broken, or of the null id, still fails. Everything on virtual time."""
+
+from __future__ import annotations
+
+import json
+import struct
+
+import pytest
+
+from imc_conformance.capture.recording import Recorder, about_run
+from imc_conformance.cli import main
+from imc_conformance.core.verdicts import Verdict
+from imc_conformance.suites.imc import codec
+from imc_conformance.suites.imc.crc16 import crc16
+from imc_conformance.suites.imc.node import ReferenceNode
+
+from live_harness import EVERYTHING, NODE, run_virtual
+
+TRAFFIC = "vehicle-traffic"
+
+
+def sound(defs, mgid: int, payload: bytes, e: str = "<") -> bytes:
+    body = struct.pack(e + "HHHdHBHB", defs.sync, mgid, len(payload), 1.7e9, 30, 0, 0xFFFF, 0xFF) + payload
+    return body + struct.pack(e + "H", crc16(body))
+
+
+def outcome(result) -> dict[str, str]:
+    return {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED)}
+
+
+@pytest.mark.parametrize("edition", ["imc-5.4.30", "imc-5.4.11"])
+def test_a_vehicles_other_traffic_fails_no_scenario_and_is_counted(suite, cases, edition):
+    result, _ = run_virtual(suite, cases, edition, kinds=("scenario", "robustness"), variant=TRAFFIC, strict=True)
+    reference, _ = run_virtual(suite, cases, edition, kinds=("scenario", "robustness"), strict=True)
+    assert outcome(result) == {} and result.exit_code() == 0
+    assert {c.id: c.verdict for c in result.cases} == {c.id: c.verdict for c in reference.cases}
+    known = next(n for n in result.notes if "messages the suite does not cover (framing checked only)" in n)
+    assert all(f"id {i} (" in known for i in (350, 1, 7, 254, 263)) and "id 999" not in known
+    undefined = next(n for n in result.notes if "no definition the suite has names" in n)
+    assert "id 999 (" in undefined and "never a failure" in undefined
+
+
+def test_a_recorded_run_with_that_traffic_is_judged_alike_by_pcap(suite, cases, tmp_path):
+    path, out = tmp_path / "run.pcapng", tmp_path / "judged.json"
+    options = dict(EVERYTHING, time_scale=1.0, profile=suite.profile("seed"))
+    ids = [c.id for c in cases if c.kind == "scenario"]
+    recorder = Recorder(path, about_run("imc", "imc-5.4.30", ids, options, "udp://127.0.0.1:6002", None, None, 10.0))
+    try:
+        live, _ = run_virtual(suite, cases, "imc-5.4.30", options=options, recorder=recorder, variant=TRAFFIC)
+    finally:
+        recorder.close(complete=True)
+    assert main(["pcap", str(path), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    judged = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    assert {k: v for k, v in judged.items() if "/capture/" not in k} == {c.id: c.verdict.value for c in live.cases}
+    assert not {k: v for k, v in judged.items() if v not in ("PASS", "IMPL_DEFINED")}
+    assert any("id 350 (" in n and "does not cover" in n for n in doc["notes"])
+    assert any("id 999 (" in n and "no definition" in n for n in doc["notes"])
+
+
+def test_a_log_with_that_traffic_is_judged_alike(suite, tmp_path, capsys):
+    node = ReferenceNode(suite.defs, suite.behaviour, edition="imc-5.4.30", address=NODE, variant=TRAFFIC)
+    heartbeat = codec.encode(suite.defs, {"abbrev": "Heartbeat", "fields": {}, "header": {
+        "timestamp": 1.7e9, "src": 30, "src_ent": 0, "dst": 0xFFFF, "dst_ent": 0xFF}})
+    (tmp_path / "Data.lsf").write_bytes(b"".join(node._traffic(1.0) + [heartbeat]))
+    assert main(["log", str(tmp_path / "Data.lsf"), "--json", str(tmp_path / "log.json")]) == 0
+    doc = json.loads((tmp_path / "log.json").read_text())
+    assert [c["verdict"] for m in doc["messages"] for c in m["cases"]] == ["PASS"]
+    assert any("id 263 (1)" in n for n in doc["notes"]) and any("id 999 (1)" in n for n in doc["notes"])
+
+
+@pytest.mark.parametrize("order", ["<", ">"])
+def test_the_wire_tells_other_traffic_from_a_broken_frame_in_either_byte_order(suite, order):
+    wire, defs = suite.wire, suite.defs
+    other = wire.parse(sound(defs, 350, bytes(88), order))
+    assert (other.outside, other.undefined, other.problem, other.decoded) == ("id 350", False, None, None)
+    assert wire.parse(sound(defs, 999, b"\x01", order)).undefined
+    damaged = bytearray(sound(defs, 350, bytes(88), order))
+    damaged[-1] ^= 1
+    assert wire.parse(bytes(damaged)).problem.startswith("crc") and wire.parse(bytes(damaged)).outside is None
+    null = wire.parse(sound(defs, defs.null_id, b"", order))
+    assert null.problem.startswith("unknown-id") and null.outside is None  # the null id names no message at all
+
+
+def test_watch_judges_that_traffic_alike(suite):
+    """What ``watch`` does with each datagram its socket receives (``CaptureJudge.received``)."""
+    from imc_conformance.capture.datagrams import Datagram
+    from imc_conformance.capture.judge import CaptureJudge, Selection
+
+    node = ReferenceNode(suite.defs, suite.behaviour, edition="imc-5.4.30", address=NODE, variant=TRAFFIC)
+    judge = CaptureJudge("imc", suite.capture_rules(), "imc-5.4.30", Selection(frozenset([6001])))
+    for i, payload in enumerate(node._traffic(0.0)):
+        judge.received(Datagram(i + 1, 1.7e9 + i, "127.0.0.1", 6002, "127.0.0.1", 6001, payload))
+    result = judge.result(implementation="watch", started="", duration=0.0, strict=True, title="watch")
+    assert result.exit_code() == 2 and not result.cases  # nothing of the suite: nothing judged, nothing failed
+    assert any("id 350 (1)" in n and "does not cover" in n for n in result.notes)
+    assert any("id 999 (1)" in n and "never a failure" in n for n in result.notes)
