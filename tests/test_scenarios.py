@@ -70,6 +70,12 @@ CAUGHT = {
     "replies-to-every-client": ("imc/AcousticSystemsQuery/scenario/two-clients", "NON_STRICT"),
     "dies-on-own-id": ("imc/AcousticRequest/robustness/still-served", "FAIL"),
     "exhausted-by-many": ("imc/HistoricDataQuery/robustness/still-served", "FAIL"),
+    "silent-on-abort": ("imc/AcousticOperation/scenario/abort", "FAIL"),
+    "msg-ends-in-range": ("imc/AcousticOperation/scenario/msg", "FAIL"),
+    "answers-bad-crc": ("imc/HistoricDataQuery/scenario/bad-crc-dropped", "FAIL"),
+    "forwards-expired": ("imc/RemoteCommand/scenario/expired-not-forwarded", "FAIL"),
+    "empty-when-small": ("imc/HistoricDataQuery/scenario/sample-order", "NON_STRICT"),
+    "clear-keeps-data": ("imc/HistoricDataQuery/scenario/clear-empties", "NON_STRICT"),
 }
 
 
@@ -459,6 +465,10 @@ def test_echoed_requests_and_the_nodes_internal_traffic_are_not_taken_for_replie
     class ChattyNode(ReferenceNode):
         def receive(self, t, data, source):
             super().receive(t, data, source)
+            try:
+                codec.decode(self.defs, data)  # DUNE passes on what it decoded: a frame it drops is not echoed
+            except ValueError:
+                return
             if source in self.contacts.values():
                 self._later(t, 0.001, source, data)  # the request itself, back to its sender
                 internal = {"abbrev": "AcousticStatus", "header": {"timestamp": 0.0, "src": self.system, "src_ent": 43,

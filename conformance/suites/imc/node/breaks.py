@@ -57,6 +57,12 @@ BREAKS = {
     "replies-to-every-client": "every reply is also sent, addressed to it, to each other client (a SHOULD: one reply per query)",
     "dies-on-own-id": "after a datagram carrying its own id, acoustic requests go unanswered (caught by --robustness)",
     "exhausted-by-many": "after 80 HistoricDataQuery within a second, no request is served (caught by --robustness)",
+    "silent-on-abort": "an ABORT to a system on the acoustic channel goes unanswered",
+    "msg-ends-in-range": "a MSG AcousticOperation ends in RANGE_RECVED",
+    "answers-bad-crc": "a frame whose CRC is wrong is taken as if it were right, and answered",
+    "forwards-expired": "a RemoteCommand whose timeout has passed is still resent to its recipient on the link",
+    "empty-when-small": "a QUERY whose max_size cannot carry every kept sample gets a reply with no data (a SHOULD)",
+    "clear-keeps-data": "a CLEAR is acknowledged but the kept data stays (a SHOULD: DUNE's practice)",
 }
 
 VARIANTS = {

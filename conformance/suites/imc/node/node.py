@@ -107,7 +107,13 @@ class ReferenceNode:
             return
         except ValueError:
             self.dropped += 1
-            return
+            if self.broken != "answers-bad-crc" or len(data) < codec.HEADER_SIZE + 2:
+                return
+            try:  # the broken node recomputes the CRC instead of checking it
+                order = codec.ORDERS[codec.byte_order_of(data)]
+                message = codec.decode(self.defs, data[:-2] + struct.pack(order + "H", crc16(data[:-2])))
+            except (ValueError, KeyError, NotJudged):
+                return
         if self.broken == "leaks-on-drop" and self.dropped >= 5000:
             return
         order = codec.byte_order_of(data)
@@ -280,6 +286,10 @@ class ReferenceNode:
             return
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
+        if self.broken == "msg-ends-in-range" and op == "MSG":
+            success = "RANGE_RECVED"
+        if self.broken == "silent-on-abort" and op == "ABORT" and distance is not None:
+            return
         travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + self.turnaround
         self.modem_free_at = t + travel
         if self.variant == "queued-first" and progress == "MSG_IP":
@@ -383,7 +393,8 @@ class ReferenceNode:
             self.dropped_ids.add(req_id)
             return
         if kind == "CLEAR":
-            self.kept.clear()
+            if self.broken != "clear-keeps-data":
+                self.kept.clear()
             fields = {"req_id": req_id, "type": f["type"], "max_size": f["max_size"], "data": None}
         elif kind == "QUERY":
             fields = {"req_id": req_id, "type": self._v("HistoricDataQuery", "type", "REPLY"), "max_size": f["max_size"],
@@ -405,7 +416,7 @@ class ReferenceNode:
             data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": items}}
             if self.broken == "ignores-max-size" or self.wire.size_of("HistoricDataQuery", "data", data) <= max_size:
                 return data if items or self.broken == "ignores-max-size" else None
-            if not items:
+            if not items or self.broken == "empty-when-small":
                 return None
             items = items[:-1]
 
@@ -431,6 +442,9 @@ class ReferenceNode:
             if f["destination"] == self.system:
                 return
         if as_float(f["timeout"]) > self.epoch0 + t or self.broken == "keeps-expired-commands":
+            self.kept.append({"abbrev": "RemoteCommand", "fields": f})
+            self._forward(t)
+        elif self.broken == "forwards-expired" and f["destination"] in self.contacts:
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
             self._forward(t)
 
