@@ -76,6 +76,10 @@ CAUGHT = {
     "forwards-expired": ("imc/RemoteCommand/scenario/expired-not-forwarded", "FAIL"),
     "empty-when-small": ("imc/HistoricDataQuery/scenario/sample-order", "NON_STRICT"),
     "clear-keeps-data": ("imc/HistoricDataQuery/scenario/clear-empties", "NON_STRICT"),
+    "ok-when-gateway-fails": ("imc/IridiumMsgTx/scenario/gateway-fails", "NON_STRICT"),
+    "error-without-text": ("imc/IridiumMsgTx/scenario/gateway-gone", "NON_STRICT"),
+    "retries-after-ttl": ("imc/IridiumMsgTx/scenario/gateway-slow", "FAIL"),
+    "sms-ignores-timeout": ("imc/SmsTx/scenario/gateway-slow", "NON_STRICT"),
 }
 
 

@@ -63,6 +63,10 @@ BREAKS = {
     "forwards-expired": "a RemoteCommand whose timeout has passed is still resent to its recipient on the link",
     "empty-when-small": "a QUERY whose max_size cannot carry every kept sample gets a reply with no data (a SHOULD)",
     "clear-keeps-data": "a CLEAR is acknowledged but the kept data stays (a SHOULD: DUNE's practice)",
+    "ok-when-gateway-fails": "an Iridium message or SMS its gateway refused, or could not take, is reported delivered (a SHOULD)",
+    "error-without-text": "an Iridium ERROR or SMS failure says nothing of why: its text is empty (a SHOULD)",
+    "retries-after-ttl": "with its gateway slow, an Iridium message is attempted again (TRANSMIT) after its time to live",
+    "sms-ignores-timeout": "with its gateway slow, an SMS is completed when the gateway answers, long after its timeout (a SHOULD)",
 }
 
 VARIANTS = {

@@ -10,10 +10,10 @@ kept (a flood of spoofed Announces cannot push out a contact that keeps talking)
 codec does not judge (nested too deep) is dropped and counted like a malformed one.
 
 Acoustic operations go over a simulated channel: each peer has a range, a reply takes the two-way travel
-time at 1500 m/s, and the modem is busy until the operation ends. Iridium and SMS go to fake gateways that
-always deliver. ``loss`` and ``dup`` drop and repeat datagrams with a seeded generator; loss touches only
+time at 1500 m/s, and the modem is busy until the operation ends. Iridium and SMS go to simulated gateways that
+deliver at once unless a message's data asks them to fail, slow down or vanish (the stand-in's rule: gateway.py). ``loss`` and ``dup`` drop and repeat datagrams with a seeded generator; loss touches only
 the requests and replies of idempotent exchanges (exchanges.json), which a scenario may resend, and never more than
-``LOSS_RUN`` of one message in a row.
+``LOSS_RUN`` copies of one message.
 """
 
 from __future__ import annotations
@@ -31,8 +31,9 @@ from ....kinds.vector.errors import NotJudged
 from ..crc16 import crc16
 from ..definitions import Definitions
 from ....kinds.vector.floats import as_float
-from ..values import text_bytes
+from ..values import raw_bytes, text_bytes
 from ..wire import ImcWire
+from . import gateway
 from .breaks import BREAKS, VARIANTS
 
 SOUND_SPEED = 1500.0  # m/s
@@ -43,7 +44,8 @@ ACOUSTIC_ENTITY = 43
 SERVICE_URL = re.compile(r"imc\+udp://([^:/;]+|\[[0-9a-fA-F:]+\]):([0-9]+)/?")
 MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
-LOSS_RUN = 2  # at most this many datagrams of one message dropped in a row by ``loss``
+LOSS_RUN = 2  # at most this many copies of one message dropped by ``loss``
+MAX_LOSS_KEYS = 4096  # messages whose drops are counted at once (then the count starts again)
 SLOW_TURNAROUND = 4.0  # s a peer's modem takes to answer under the busy-then-completes variant
 
 
@@ -68,7 +70,7 @@ class ReferenceNode:
         self.address, self.name, self.system = address, name, system
         self.peers = dict(peers if peers is not None else {"imc-peer-1": 150.0, "imc-peer-2": 1200.0})
         self.loss, self.dup, self.rng, self.broken, self.epoch0 = loss, dup, random.Random(seed), broken, epoch0
-        self.loss_runs: dict[str, int] = {}  # message -> how many of it were dropped in a row
+        self.loss_runs: dict[tuple, int] = {}  # (message, its fields) -> how many copies of it were dropped
         self.queue: list = []
         self.order = itertools.count()
         self.contacts: dict[int, tuple[str, int]] = {}
@@ -366,19 +368,33 @@ class ReferenceNode:
             status(travel + 0.1, "ERROR", info="second final status")
 
     def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
-        req_id = message["fields"]["req_id"]
+        req_id, ttl = message["fields"]["req_id"], message["fields"]["ttl"]
         req_id = (req_id + 1) % 0x10000 if self.broken == "req-id-not-echoed" else req_id
-        late = message["fields"]["ttl"] + 2.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
-        states = ((PROCESSING, "QUEUED"), (0.2 + late, "TRANSMIT"), (0.5 + late, "OK"))
-        for delay, name in states[::2] if self.broken == "late-ok" else states:
-            fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": ""}
+        late = ttl + 2.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
+        states = ((PROCESSING, "QUEUED", ""), (0.2 + late, "TRANSMIT", ""), (0.5 + late, "OK", ""))
+        states = states[::2] if self.broken == "late-ok" else states
+        states = gateway.simulated(self._gateway_mode(message), ttl, states, "TRANSMIT", "EXPIRED", "ERROR", self.broken)
+        for delay, name, text in states:
+            fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": text}
             self._reply(t, delay, message, "IridiumTxStatus", fields)
 
     def _on_SmsTx(self, t: float, message: dict) -> None:
         seq = message["fields"]["seq"]
         seq = (seq + 1) % 0x100000000 if self.broken == "seq-not-echoed" else seq
-        for delay, name in ((PROCESSING, "ACCEPTED"), (0.2, "TRANSMITTING"), (0.5, "COMPLETED")):
-            self._reply(t, delay, message, "SmsState", {"seq": seq, "state": self._v("SmsState", "state", name), "error": ""})
+        states = ((PROCESSING, "ACCEPTED", ""), (0.2, "TRANSMITTING", ""), (0.5, "COMPLETED", ""))
+        mode = self._gateway_mode(message)
+        states = gateway.simulated(mode, message["fields"]["timeout"], states, "TRANSMITTING", "INTERRUPTED",
+                                   "REJECTED" if mode == "gone" else "INTERRUPTED", self.broken)
+        for delay, name, error in states:
+            self._reply(t, delay, message, "SmsState", {"seq": seq, "state": self._v("SmsState", "state", name), "error": error})
+
+    def _gateway_mode(self, message: dict) -> str:
+        """What the simulated gateway does with a message: the stand-in's rule (gateway.py), read from its data."""
+        try:
+            mode = gateway.plan(raw_bytes(message["fields"]["data"]))
+        except ValueError:
+            return "ok"
+        return "ok" if self.broken == "ok-when-gateway-fails" and mode in ("fail", "gone") else mode
 
     def _on_HistoricDataQuery(self, t: float, message: dict) -> None:
         f = message["fields"]
@@ -517,13 +533,17 @@ class ReferenceNode:
 
     def _lost(self, message: dict, reply: bool = False) -> bool:
         """Drop at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
-        in a row of one message (a scenario resends a few times: a link that loses every try is a dead link, not a
-        lossy one)."""
+        copies of one message (a scenario resends a few times: a link that loses every try is a dead link, not a
+        lossy one; counted per message, not per kind, as other traffic between two tries must not reset it)."""
         if not self.loss or not self._idempotent(message, reply):
             return False
-        run = self.loss_runs.get(message["abbrev"], 0)
-        lost = run < LOSS_RUN and self.rng.random() < self.loss
-        self.loss_runs[message["abbrev"]] = run + 1 if lost else 0
+        key = (message["abbrev"], repr(message["fields"]))  # a resent request, or its reply, is the same message
+        dropped = self.loss_runs.get(key, 0)
+        lost = dropped < LOSS_RUN and self.rng.random() < self.loss
+        if lost:
+            if len(self.loss_runs) >= MAX_LOSS_KEYS:
+                self.loss_runs.clear()
+            self.loss_runs[key] = dropped + 1
         return lost
 
     def _idempotent(self, message: dict, reply: bool) -> bool:
