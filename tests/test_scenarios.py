@@ -80,6 +80,8 @@ CAUGHT = {
     "error-without-text": ("imc/IridiumMsgTx/scenario/gateway-gone", "NON_STRICT"),
     "retries-after-ttl": ("imc/IridiumMsgTx/scenario/gateway-slow", "FAIL"),
     "sms-ignores-timeout": ("imc/SmsTx/scenario/gateway-slow", "NON_STRICT"),
+    "answers-replies": ("imc/HistoricDataQuery/scenario/not-a-query", "NON_STRICT"),
+    "answers-unsolicited-systems": ("imc/AcousticSystemsQuery/scenario/unsolicited-systems", "NON_STRICT"),
 }
 
 

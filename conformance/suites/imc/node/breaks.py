@@ -67,6 +67,8 @@ BREAKS = {
     "error-without-text": "an Iridium ERROR or SMS failure says nothing of why: its text is empty (a SHOULD)",
     "retries-after-ttl": "with its gateway slow, an Iridium message is attempted again (TRANSMIT) after its time to live",
     "sms-ignores-timeout": "with its gateway slow, an SMS is completed when the gateway answers, long after its timeout (a SHOULD)",
+    "answers-replies": "a HistoricDataQuery REPLY it receives is answered with a REPLY of its own (a SHOULD)",
+    "answers-unsolicited-systems": "an AcousticSystems it receives is answered with its own (a SHOULD)",
 }
 
 VARIANTS = {

@@ -215,6 +215,10 @@ class ReferenceNode:
         if self.broken == "two-replies":
             self._reply(t, PROCESSING + 0.1, message, "AcousticSystems", {"list": names})
 
+    def _on_AcousticSystems(self, t: float, message: dict) -> None:
+        if self.broken == "answers-unsolicited-systems":  # a reply taken for a query
+            self._on_AcousticSystemsQuery(t, message)
+
     def _on_SystemGroup(self, t: float, message: dict) -> None:
         """Set and Chg store a group's list of systems, Dis forgets it, Req is answered with a Rep."""
         f = message["fields"]
@@ -412,7 +416,7 @@ class ReferenceNode:
             if self.broken != "clear-keeps-data":
                 self.kept.clear()
             fields = {"req_id": req_id, "type": f["type"], "max_size": f["max_size"], "data": None}
-        elif kind == "QUERY":
+        elif kind == "QUERY" or kind == "REPLY" and self.broken == "answers-replies":
             fields = {"req_id": req_id, "type": self._v("HistoricDataQuery", "type", "REPLY"), "max_size": f["max_size"],
                       "data": self._historic_data(t, f["max_size"])}
         else:
