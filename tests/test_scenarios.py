@@ -82,6 +82,7 @@ CAUGHT = {
     "sms-ignores-timeout": ("imc/SmsTx/scenario/gateway-slow", "NON_STRICT"),
     "answers-replies": ("imc/HistoricDataQuery/scenario/not-a-query", "NON_STRICT"),
     "answers-unsolicited-systems": ("imc/AcousticSystemsQuery/scenario/unsolicited-systems", "NON_STRICT"),
+    "unsupported-as-failure": ("imc/AcousticOperation/scenario/unsupported-op-no-other-state", "FAIL"),
 }
 
 

@@ -69,6 +69,7 @@ BREAKS = {
     "sms-ignores-timeout": "with its gateway slow, an SMS is completed when the gateway answers, long after its timeout (a SHOULD)",
     "answers-replies": "a HistoricDataQuery REPLY it receives is answered with a REPLY of its own (a SHOULD)",
     "answers-unsolicited-systems": "an AcousticSystems it receives is answered with its own (a SHOULD)",
+    "unsupported-as-failure": "an AcousticOperation with an operation code it does not know is answered MSG_FAILURE, not UNSUPPORTED",
 }
 
 VARIANTS = {

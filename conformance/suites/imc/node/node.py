@@ -268,8 +268,8 @@ class ReferenceNode:
             fields = {"op": self._v("AcousticOperation", "op", name), "system": system, "range": range_, "msg": None}
             self._reply(t, delay, message, "AcousticOperation", fields, entity=ACOUSTIC_ENTITY)
 
-        if op is None and self.broken != "silent-on-unsupported":
-            state(PROCESSING, "UNSUPPORTED")  # an operation the definitions do not have
+        if op is None and self.broken != "silent-on-unsupported":  # an operation the definitions do not have
+            state(PROCESSING, "MSG_FAILURE" if self.broken == "unsupported-as-failure" else "UNSUPPORTED")
         if op not in plans:
             return  # a state (sent by another node), not a request
         distance = self.peers.get(_text(f["system"]))
