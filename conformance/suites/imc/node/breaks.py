@@ -70,6 +70,7 @@ BREAKS = {
     "answers-replies": "a HistoricDataQuery REPLY it receives is answered with a REPLY of its own (a SHOULD)",
     "answers-unsolicited-systems": "an AcousticSystems it receives is answered with its own (a SHOULD)",
     "unsupported-as-failure": "an AcousticOperation with an operation code it does not know is answered MSG_FAILURE, not UNSUPPORTED",
+    "succeeds-to-unknown": "an AcousticRequest to a destination it does not know ends in SENT (a SHOULD)",
 }
 
 VARIANTS = {

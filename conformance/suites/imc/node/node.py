@@ -345,7 +345,7 @@ class ReferenceNode:
             status(PROCESSING, "INPUT_FAILURE", info="no message to send")
             return
         if distance is None:
-            status(PROCESSING, "INV_ADDR", info="unknown destination")
+            status(PROCESSING, *(("SENT",) if self.broken == "succeeds-to-unknown" else ("INV_ADDR", 0.0, "unknown destination")))
             return
         travel = 2 * distance / SOUND_SPEED + self.turnaround
         timeout = as_float(f["timeout"])
