@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from imc_conformance.kinds.scenario.coverage import audit_problem, coverage_markdown, statuses
 
 
@@ -61,3 +63,40 @@ def test_the_audit_agrees_with_the_table_and_is_shown(suite, cases):
     assert "the table says exercised" in audit_problem(document["statements"], wrong, live)
     claimed = [dict(s, exercised="why") if s["id"] == "LblConfig.get-cfg" else s for s in document["statements"]]
     assert "LblConfig.get-cfg" in audit_problem(claimed, audit, live)
+
+
+def test_a_damaged_crc_is_sent_as_asked_and_nothing_else_changes(suite, cases):
+    """The encoding le-bad-crc (be-bad-crc) sends the frame with every bit of its CRC flipped: invalid by that one
+    rule; what a later step reads of it ($sent) is what it says. An encoding the wire does not know is a corpus error."""
+    from imc_conformance.kinds.scenario.wire import Addressing
+    from imc_conformance.kinds.vector.errors import FrameError
+    from imc_conformance.suites.imc import codec
+
+    message = {"abbrev": "HistoricDataQuery", "fields": {"req_id": 7, "type": 1, "max_size": 1000, "data": None}}
+    for order in ("le", "be"):
+        good = suite.wire.compose(message, order, Addressing(1, 1, 2, 3), 0.0)
+        bad = suite.wire.compose(message, f"{order}-bad-crc", Addressing(1, 1, 2, 3), 0.0)
+        assert bad.data[:-2] == good.data[:-2] and bytes(a ^ b for a, b in zip(bad.data[-2:], good.data[-2:])) == b"\xff\xff"
+        assert bad.decoded == good.decoded
+        with pytest.raises(FrameError) as caught:
+            codec.decode(suite.defs, bad.data)
+        assert "crc" in caught.value.rule
+    case = _case(cases, "imc/HistoricDataQuery/scenario/bad-crc-dropped")
+    case["steps"][0]["encoding"] = "le-bad"
+    problem = suite.live_problem("scenario", case)
+    assert problem[0] == ".steps[0].send" and "unknown encoding" in problem[1]
+
+
+def test_a_silence_filtered_by_fields_counts_only_what_matches(suite, cases):
+    """unsupported-op-no-other-state: the reference node's UNSUPPORTED does not break the silence (it is what the
+    statement asks), a MSG_FAILURE for the same operation does (break unsupported-as-failure)."""
+    from live_harness import run_virtual
+
+    case_id = "imc/AcousticOperation/scenario/unsupported-op-no-other-state"
+    chosen = [c for c in cases if c.id == case_id]
+    result, _ = run_virtual(suite, chosen)
+    case = next(c for c in result.cases if c.id == case_id)
+    assert case.verdict.value == "PASS"
+    assert any("not what the silence is about" in (e.get("note") or "") for e in case.timeline)
+    result, _ = run_virtual(suite, chosen, broken="unsupported-as-failure")
+    assert next(c for c in result.cases if c.id == case_id).verdict.value == "FAIL"
