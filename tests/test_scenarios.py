@@ -84,6 +84,7 @@ CAUGHT = {
     "answers-unsolicited-systems": ("imc/AcousticSystemsQuery/scenario/unsolicited-systems", "NON_STRICT"),
     "unsupported-as-failure": ("imc/AcousticOperation/scenario/unsupported-op-no-other-state", "FAIL"),
     "succeeds-to-unknown": ("imc/AcousticRequest/scenario/unknown-destination-never-succeeds", "NON_STRICT"),
+    "dies-on-compressed-history": ("imc/HistoricDataQuery/scenario/compressed-history", "FAIL"),
 }
 
 

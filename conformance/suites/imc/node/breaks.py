@@ -71,6 +71,7 @@ BREAKS = {
     "answers-unsolicited-systems": "an AcousticSystems it receives is answered with its own (a SHOULD)",
     "unsupported-as-failure": "an AcousticOperation with an operation code it does not know is answered MSG_FAILURE, not UNSUPPORTED",
     "succeeds-to-unknown": "an AcousticRequest to a destination it does not know ends in SENT (a SHOULD)",
+    "dies-on-compressed-history": "after a CompressedHistory, no request is served",
 }
 
 VARIANTS = {

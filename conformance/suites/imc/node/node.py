@@ -454,6 +454,10 @@ class ReferenceNode:
             elif item["abbrev"] == "RemoteCommand":
                 self._on_RemoteCommand(t, dict(message, abbrev="RemoteCommand", fields=item["fields"]))
 
+    def _on_CompressedHistory(self, t: float, message: dict) -> None:
+        """Not read (a reading the seeds leave open: compressed-history-input); the broken node stops serving."""
+        self.exhausted = self.exhausted or self.broken == "dies-on-compressed-history"
+
     def _on_RemoteCommand(self, t: float, message: dict) -> None:
         f = message["fields"]
         if f["destination"] == self.system or self.broken == "executes-others-commands":
