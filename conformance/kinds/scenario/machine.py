@@ -185,8 +185,13 @@ class Machine:
 
     def _take(self, t: float, epoch: float, parsed: Parsed) -> list[Composed]:
         step = self.step
+        before = step.misechoed if step is not None else None
         if step is None or not self._candidate(step, parsed):
             if step is not None and step.misechoed is not None and step.until is not None:
+                if before is None and hashable(parsed.data) in self.seen:  # an earlier step's reply, copied late
+                    step.misechoed = None
+                    self._log(t, "duplicate", parsed, "a byte-identical copy of a datagram an earlier step took (tolerated)")
+                    return []
                 return self._answered_wrongly(t, epoch, step, parsed)
             if self.watches(parsed) or parsed.problem:
                 self._log(t, "ignored", parsed, "not awaited by the current step" if not parsed.problem

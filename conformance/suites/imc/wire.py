@@ -36,7 +36,8 @@ class ImcWire:
         decoded = codec.decode(self.defs, frame)  # what the frame says: a damaged CRC changes no field
         if damaged:
             frame = frame[:-2] + bytes(b ^ 0xFF for b in frame[-2:])
-        return Composed(frame, decoded, message["abbrev"], encoding or "le", {"step": step})
+        return Composed(frame, decoded, message["abbrev"], encoding or "le",
+                        {"step": step, **({"damaged": "crc"} if damaged else {})})
 
     def parse(self, data: bytes) -> Parsed:
         try:
