@@ -10,7 +10,8 @@ from imc_conformance.suites.imc.node import ReferenceNode
 from imc_conformance.suites.imc.peer import DEFAULT_SYSTEM, ImcPeer
 
 NODE, OWN = ("127.0.0.1", 6002), ("127.0.0.1", 6001)
-PARAMS = {"peer": "imc-peer-1", "beacon": "b1", "sms_number": "+351000000000", "remote_system": 8208}
+PARAMS = {"peer": "imc-peer-1", "beacon": "b1", "sms_number": "+351000000000", "remote_system": 8208,
+          "gateway": "http://127.0.0.1:8888/"}
 EVERYTHING = {"params": PARAMS, "effects": {"all"}}
 LIVE_KINDS = ("scenario", "robustness")
 

@@ -20,6 +20,8 @@ NOT_PASS = {
     "imc/SmsTx/scenario/state": "UNSUPPORTED",  # not claimed: no GSM modem in the simulation
     "imc/SystemGroup/scenario/set-then-request": "UNSUPPORTED",  # not claimed: no DUNE task handles it
     "imc/HistoricDataQuery/scenario/sample-priority": "FAIL",  # DataStore transmits the -127 sample
+    # recorded when the scenario's samples were 40 bytes: DUNE answered that max_size with no data, a SHOULD not met
+    "imc/HistoricDataQuery/scenario/sample-order": "NON_STRICT",
     "imc/RemoteCommand/scenario/forwarded": "NON_STRICT",  # kept apart and forwarded by another route
     "imc/LblConfig/scenario/set-for-another-system": "NON_STRICT",  # a SET_CFG is applied whatever its destination
     "imc/LblConfig/scenario/unannounced-sender": "IMPL_DEFINED",  # served only once announced: a reading

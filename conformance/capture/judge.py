@@ -16,7 +16,7 @@ from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched
 from .logs import Logged
 from .outside import Outside
-from .recording import OWN, RECEIVED
+from .recording import DAMAGED, OWN, RECEIVED
 from .records import Record
 
 FRAME_CLAUSE = "the byte rules of the suite's corpus (rules.json)"
@@ -181,6 +181,9 @@ class CaptureJudge:
             return
         if self.filtered and not self._in(got, frames=False):  # outside the window or the host: unseen
             self.skipped["outside the selection"] += 1
+            return
+        if recorded and got.comment.endswith(DAMAGED):  # a scenario's invalid frame: the node's answer is judged
+            self.skipped["frames a scenario of the recorded run damaged on purpose"] += 1
             return
         self._judge_unit(got, deliberate)
 

@@ -16,6 +16,7 @@ from .writing import PcapNgWriter
 ABOUT = "imc-conformance run "
 COMPLETE = "imc-conformance run complete"  # the last comment of a run that was not interrupted
 RECEIVED, OWN = "received", "the session's own"  # the comments of what the session received, and of its manners
+DAMAGED = "(damaged on purpose)"  # ends the comment of a frame a scenario sends invalid by design (its CRC flipped)
 
 
 class Recorder:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Iterable, Iterator, Protocol
 
 from ..capture.outside import Outside
-from ..capture.recording import OWN, RECEIVED
+from ..capture.recording import DAMAGED, OWN, RECEIVED
 from ..core.results import Incident
 from ..core.session import Answer, Job
 from ..kinds.scenario import Addressing, Conductor
@@ -213,8 +213,10 @@ class DatagramSession:
 
     def _transmit(self, outgoing) -> None:
         for item in list(outgoing):
+            comment = f"{item.job.case_id} {item.composed.extra.get('step', '')}".rstrip()
+            comment += f" {DAMAGED}" if item.composed.extra.get("damaged") else ""
             self._record(self.transport.now(), tuple(self.transport.address[:2]), tuple(self.transport.target[:2]),
-                         item.composed.data, f"{item.job.case_id} {item.composed.extra.get('step', '')}".rstrip())
+                         item.composed.data, comment)
             why = self.transport.send(item.composed.data)
             if why:  # the scenario cannot go on; the node is not to blame
                 self._transmit(self.conductor.undeliverable(self.transport.now(), item.job, why))

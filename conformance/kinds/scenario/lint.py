@@ -3,8 +3,9 @@ a mistake in a scenario is a corpus error (exit 2), never a verdict on the imple
 
 from __future__ import annotations
 
+from .exchanges import exchange_for, silence_allowed
 from .machine import Program
-from .matchers import is_matcher
+from .matchers import is_matcher, same
 from .values import Scope, Unresolved, resolve_matcher, resolve_message, resolve_plain
 from .wire import Addressing
 
@@ -33,6 +34,10 @@ def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
         problem = _normative_problem(step, statements)
         if problem:
             return f".steps[{i}]", problem
+        for j, sid in enumerate(step.get("covers", ())):
+            problem = _level_problem(step, statements[sid])
+            if problem:
+                return f".steps[{i}].covers[{j}]", problem
         for key, value in _bounds_of(step):
             problem = _bound_problem(value, behaviour.get("bounds"))
             if problem:
@@ -54,13 +59,13 @@ def lint_scenario(case: dict, wire, behaviour: dict, editions, known, fields_of,
     if unknown:
         return ".expect", f"unknown edition {sorted(unknown)[0]!r}"
     for edition in applies:
-        problem = _lint_steps(case, wire, behaviour, edition, known, fields_of, params)
+        problem = _lint_steps(case, wire, behaviour, edition, known, fields_of, params, statements)
         if problem:
             return problem
     return None
 
 
-def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
+def _lint_steps(case, wire, behaviour, edition, known, fields_of, params, statements):
     examples = {name: int(p["example"], 0) if p["type"] == "integer" else p["example"]
                 for name, p in behaviour["params"].items()}
     examples.update(params or {})
@@ -112,6 +117,9 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
             exchange = program.exchange_for(sends[ref])
             if exchange is None:
                 return where + ".reply_to", f"no exchange of exchanges.json opens with what step {ref!r} sends"
+            problem = _silent_cover_problem(case, step, ref, sends, exchange, wire, edition, behaviour, statements)
+            if problem:
+                return where + ".covers", problem
             if exchange["reply"] != message:
                 return f"{where}.{kind}", f"step {ref!r} opens the exchange {exchange['id']!r}, answered by {exchange['reply']}"
             if kind == "sequence" and "state" not in exchange:
@@ -158,6 +166,53 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params):
         if message is not None and kind in ("expect", "sequence"):
             scope.replies[step["id"]] = wire.example(message, edition)  # what a later step's $reply reads
     return None
+
+
+ORDER = ("INFO", "SHOULD", "MUST")
+
+
+def _level_problem(step: dict, statement: dict) -> str | None:
+    """Why a step may not call a statement checked (``covers``): the behaviour-coverage table calls a statement
+    checked only where a step fails (or, for a SHOULD, flags) a node that breaks it, so the step must judge at the
+    statement's level or above and must not let silence pass (``if_silent``); otherwise the step ``exercises`` it."""
+    level = step.get("level", "MUST")
+    if ORDER.index(level) < ORDER.index(statement["level"]):
+        return (f"{statement['id']!r} is a {statement['level']} statement and this step judges at {level}: it does not "
+                "assert it at its level (list it under exercises)")
+    if "if_silent" in step:
+        return (f"this step lets silence pass ({step['if_silent']}), so a node that never does what "
+                f"{statement['id']!r} says passes: list it under exercises")
+    return None
+
+
+def _silent_cover_problem(case, step, ref, sends, exchange, wire, edition, behaviour, statements) -> str | None:
+    """Why a reply step may not call its statements checked: the exchange lets the request go unanswered (its
+    ``silence`` rules, or those for every request), so a node that never answers passes; where the register weighs
+    that silence as a SHOULD not met (NON_STRICT), it still asserts the statements of level SHOULD or below."""
+    if not step.get("covers") or "silence" in step:
+        return None
+    spec = next(s for s in case["steps"] if s["id"] == ref)
+    fields = sends[ref]["fields"]
+    nobody = {n for n, v in spec["send"]["fields"].items() if isinstance(v, dict) and "$nobody" in v}
+    order = [s["id"] for s in case["steps"]]
+    earlier = [sends[s]["fields"] for s in sends if order.index(s) < order.index(ref)
+               and exchange is _exchange_of(sends[s], behaviour, wire, edition)]
+    reuses = {r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"
+              and any(same(e.get(r["request_field"]), fields.get(r["request_field"])) for e in earlier)}
+    facts = {"nobody": nobody, "reuses": reuses, "to": "elsewhere" if spec.get("to") not in (None, "node") else None}
+    ambiguity = silence_allowed(wire, exchange, fields, edition, facts, behaviour.get("silence", ()))
+    if ambiguity is None:
+        return None
+    weighed = behaviour.get("ambiguities", {}).get(ambiguity, {}).get("level", "INFO")
+    unmet = [sid for sid in step["covers"] if ORDER.index(statements[sid]["level"]) > ORDER.index(weighed)]
+    if not unmet:
+        return None
+    return (f"the seeds let {ref!r} go unanswered ({ambiguity}), so a node that never answers passes: list "
+            f"{', '.join(map(repr, unmet))} under exercises")
+
+
+def _exchange_of(message: dict, behaviour: dict, wire, edition: str):
+    return exchange_for(behaviour["exchanges"], wire, message, edition)
 
 
 def _bounds_of(step: dict):

@@ -5,7 +5,8 @@ Steps (each names its ``id``, ``level`` MUST or SHOULD, and ``clause``):
 ``send`` a message; ``expect`` a message within a bound (a reply to an earlier send, correlated by the
 exchange rules, resent after the bound if the exchange is idempotent; or any such message, ``count`` of
 them); ``sequence``: replies passing through progress states to exactly one terminal state, then
-nothing more for a quiet period; ``silence``: no such message for a while; ``alive``: the node still
+nothing more for a quiet period; ``silence``: no such message (with its ``fields``, where it gives them) for a
+while; ``alive``: the node still
 sends something; ``wait``.
 
 Levels come from the seeds' words: a step is MUST or SHOULD, and the rules of a sequence's states carry the level
@@ -185,8 +186,13 @@ class Machine:
 
     def _take(self, t: float, epoch: float, parsed: Parsed) -> list[Composed]:
         step = self.step
+        before = step.misechoed if step is not None else None
         if step is None or not self._candidate(step, parsed):
             if step is not None and step.misechoed is not None and step.until is not None:
+                if before is None and hashable(parsed.data) in self.seen:  # an earlier step's reply, copied late
+                    step.misechoed = None
+                    self._log(t, "duplicate", parsed, "a byte-identical copy of a datagram an earlier step took (tolerated)")
+                    return []
                 return self._answered_wrongly(t, epoch, step, parsed)
             if self.watches(parsed) or parsed.problem:
                 self._log(t, "ignored", parsed, "not awaited by the current step" if not parsed.problem
@@ -576,8 +582,13 @@ class Machine:
 
     def _on_silence(self, t: float, step: _Step, parsed: Parsed) -> None:
         ref = step.spec.get("reply_to")
-        if ref is not None and self.answers[ref] <= self.sends[ref]:  # the request went more than once
+        awaited = any(s.get("reply_to") == ref and ("expect" in s or "sequence" in s)
+                      for s in self.program.scenario["steps"][:self.index])  # else no answer at all is allowed
+        if ref is not None and awaited and self.answers[ref] <= self.sends[ref]:  # the request went more than once
             self._log(t, "received", parsed, f"an answer to one of the {self.sends[ref]} times the request was sent")
+            return
+        if "fields" in step.spec and self._match_fields(step.spec["silence"], step.spec["fields"], parsed) is not None:
+            self._log(t, "ignored", parsed, "not what the silence is about (its fields)")
             return
         step.replies.append(parsed)
         self._log(t, "received", parsed, "breaks the expected silence")

@@ -40,11 +40,15 @@ class ImcWire:
                   "src_ent": UNKNOWN_ENTITY if addressing.entity is None else addressing.entity,
                   "dst": UNKNOWN_SYSTEM if addressing.node is None else addressing.node, "dst_ent": UNKNOWN_ENTITY}
         header.update(message.get("header", {}))
-        frame = codec.encode(self.defs, {"abbrev": message["abbrev"], "header": header, "fields": message["fields"]},
-                             encoding or "le")
+        order, damaged = _encoding(encoding)
+        frame = codec.encode(self.defs, {"abbrev": message["abbrev"], "header": header, "fields": message["fields"]}, order)
         if len(frame) > DATAGRAM_LIMIT:
             raise ValueError(f"the {message['abbrev']} frame is {len(frame)} bytes: one UDP datagram carries {DATAGRAM_LIMIT}")
-        return Composed(frame, codec.decode(self.defs, frame), message["abbrev"], encoding or "le", {"step": step})
+        decoded = codec.decode(self.defs, frame)  # what the frame says: a damaged CRC changes no field
+        if damaged:
+            frame = frame[:-2] + bytes(b ^ 0xFF for b in frame[-2:])
+        return Composed(frame, decoded, message["abbrev"], encoding or "le",
+                        {"step": step, **({"damaged": "crc"} if damaged else {})})
 
     def parse(self, data: bytes) -> Parsed:
         try:
@@ -199,3 +203,12 @@ class ImcWire:
             else:
                 out[key] = value
         return out
+
+
+def _encoding(encoding: str | None) -> tuple[str, bool]:
+    """A send step's encoding: the byte order (le, be) and whether the frame's CRC is to be damaged (le-bad-crc,
+    be-bad-crc: every bit of the stored CRC flipped, so the frame is invalid by that one rule)."""
+    order, _, damage = (encoding or "le").partition("-")
+    if order not in codec.ORDERS or damage not in ("", "bad-crc"):
+        raise ValueError(f"unknown encoding {encoding!r}: le, be, le-bad-crc or be-bad-crc")
+    return order, bool(damage)

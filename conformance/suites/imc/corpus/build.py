@@ -13,7 +13,8 @@ import argparse
 import json
 import sys
 
-from ....kinds.scenario.coverage import coverage_markdown as behaviour_markdown, live_cases
+from ....errors import CorpusError
+from ....kinds.scenario.coverage import audit_problem, coverage_markdown as behaviour_markdown, live_cases
 from ....fuzz import promote
 from ....fuzz.promote import promoted_cases
 from ....kinds.vector.provenance import case_documents, proven, provenance_markdown
@@ -47,10 +48,14 @@ def build_corpus(defs: Definitions) -> dict[str, str]:
         e: ImcFuzzSource(defs, e, {r["id"]: r["clause"] for r in load_suite("imc").rules}) for e in defs.editions})
     files = message_files(defs, examples, promoted)
     files["provenance.md"] = provenance_markdown("IMC", rules_document(), case_documents(files))
-    statements = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))["statements"]
+    document = json.loads(imc_data("statements.json").read_text(encoding="utf-8"))
+    statements, audit, live = document["statements"], document.get("audit"), live_cases(imc_data())
+    problem = audit_problem(statements, audit, live)
+    if problem:
+        raise CorpusError(f"{imc_data('statements.json')}: .audit: {problem}")
     register = json.loads(imc_data("ambiguities.json").read_text(encoding="utf-8"))["ambiguities"]
     bounds = json.loads(imc_data("exchanges.json").read_text(encoding="utf-8"))["bounds"]
-    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live_cases(imc_data()), register, bounds)
+    files["behaviour-coverage.md"] = behaviour_markdown("IMC", statements, live, register, bounds, audit)
     return files
 
 

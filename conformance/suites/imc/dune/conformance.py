@@ -28,8 +28,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from .build import built, home
-from .world import (PEER, PEER_ID, UDP_PORT, VEHICLE, dune_argv, forget_state, iridium_gateway, leftovers, restart,
-                    start, stop, write_configs)
+from .world import (IRIDIUM_PORT, PEER, PEER_ID, UDP_PORT, VEHICLE, dune_argv, forget_state, iridium_gateway,
+                    leftovers, restart, start, stop, write_configs)
 
 INSIDE = "IMC_CONFORMANCE_DUNE_NAMESPACE"
 PROFILES = ("seed", "dune")
@@ -176,7 +176,7 @@ def _suite(args, run: Path, profile: str) -> int:
     argv = ["run", "--no-progress", "--target", f"udp://127.0.0.1:{UDP_PORT}", "--startup", "40",
             "--allow-effects", "--claims", str(run / "claims.json"), "--profile", profile,
             "--param", f"peer={PEER}", "--param", f"beacon={PEER}", "--param", "sms_number=+351000000000",
-            "--param", f"remote_system={PEER_ID:#06x}",
+            "--param", f"remote_system={PEER_ID:#06x}", "--param", f"gateway=http://127.0.0.1:{IRIDIUM_PORT}/",
             "--json", str(args.reports / f"dune-{profile}.json"), "--html", str(args.reports / f"dune-{profile}.html"),
             "--pcap", str(args.reports / f"dune-{profile}.pcapng")]
     if not args.no_robustness:  # a simulated vehicle: the corpus's own destinations are harmless here
@@ -193,7 +193,7 @@ def _fuzz(args, run: Path) -> int:
     argv = ["fuzz", "--target", f"udp://127.0.0.1:{UDP_PORT}", "--startup", "40", "--allow-effects", "--replay-effects",
             "--restart-cmd", f"{sys.executable} -m imc_conformance.suites.imc.dune restart --run {run}",
             "--param", f"peer={PEER}", "--param", f"beacon={PEER}", "--param", "sms_number=+351000000000",
-            "--param", f"remote_system={PEER_ID:#06x}", "--seed", "0", "--budget", str(args.fuzz_budget),
+            "--param", f"remote_system={PEER_ID:#06x}", "--param", f"gateway=http://127.0.0.1:{IRIDIUM_PORT}/", "--seed", "0", "--budget", str(args.fuzz_budget),
             "--json", str(args.reports / "dune-fuzz.json"), "--html", str(args.reports / "dune-fuzz.html")]
     print(f"== live fuzzing: imc-conformance {' '.join(argv)}", flush=True)
     return cli(argv)

@@ -9,7 +9,6 @@ process, the ``--restart-cmd`` the robustness phase calls, can restart the vehic
 
 from __future__ import annotations
 
-import http.server
 import json
 import os
 import shutil
@@ -19,11 +18,13 @@ import threading
 import time
 from pathlib import Path
 
+from ..node.gateway import GatewayServer
 from .build import binary, source
 
 VEHICLE, VEHICLE_ID = "lauv-simulator-1", 0x00D1
 PEER, PEER_ID = "lauv-xplore-1", 0x001E
 UDP_PORT, IRIDIUM_PORT = 6002, 8888
+GATEWAY_GONE = 10.0  # seconds the stand-in stays away once a message asks it to vanish
 CONFIG_DIR = "imc-conformance"  # under DUNE's etc/, in the cache's copy of the sdist
 
 # What DUNE's UDP transport sends to its peers: the replies the scenarios wait for (a plain "Transports =" replaces
@@ -200,20 +201,9 @@ def leftovers() -> list[int]:
 
 # ---------------------------------------------------------------- the Iridium gateway stand-in
 
-class _Gateway(http.server.BaseHTTPRequestHandler):
-    def do_POST(self):  # noqa: N802 (the http.server naming)
-        length = min(int(self.headers.get("Content-Length") or 0), 1 << 20)
-        self.rfile.read(length)
-        self.send_response(200)
-        self.send_header("Content-Length", "0")
-        self.end_headers()
-
-    def log_message(self, *args):
-        pass
-
-
-def iridium_gateway() -> http.server.ThreadingHTTPServer:
-    """An HTTP server on 127.0.0.1 that takes every Iridium upload (it must run inside the namespace)."""
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", IRIDIUM_PORT), _Gateway)
+def iridium_gateway() -> GatewayServer:
+    """The gateway stand-in (node/gateway.py) on 127.0.0.1, where DUNE's Simulators.Iridium posts: it takes every
+    upload, but those whose data asks it to fail, answer late or vanish (it must run inside the namespace)."""
+    server = GatewayServer(("127.0.0.1", IRIDIUM_PORT), gone=GATEWAY_GONE)
     threading.Thread(target=server.serve_forever, daemon=True).start()
     return server

@@ -58,6 +58,21 @@ BREAKS = {
     "exhausted-by-many": "after 80 HistoricDataQuery within a second, no request is served (caught by --robustness)",
     "reused-id-crossed": "an AcousticRequest reusing the req_id of an outstanding one crosses the two: the first's end is reported under the second's type (a SHOULD: the states of each type)",
     "dies-on-reused-id": "after an AcousticRequest reusing the req_id of an outstanding one, acoustic requests go unanswered",
+    "silent-on-abort": "an ABORT to a system on the acoustic channel goes unanswered",
+    "msg-ends-in-range": "a MSG AcousticOperation ends in RANGE_RECVED",
+    "answers-bad-crc": "a frame whose CRC is wrong is taken as if it were right, and answered",
+    "forwards-expired": "a RemoteCommand whose timeout has passed is still resent to its recipient on the link",
+    "empty-when-small": "a QUERY whose max_size cannot carry every kept sample gets a reply with no data (a SHOULD)",
+    "clear-keeps-data": "a CLEAR is acknowledged but the kept data stays (a SHOULD: DUNE's practice)",
+    "ok-when-gateway-fails": "an Iridium message or SMS its gateway refused, or could not take, is reported delivered (a SHOULD)",
+    "error-without-text": "an Iridium ERROR or SMS failure says nothing of why: its text is empty (a SHOULD)",
+    "retries-after-ttl": "with its gateway slow, an Iridium message is attempted again (TRANSMIT) after its time to live",
+    "sms-ignores-timeout": "with its gateway slow, an SMS is completed when the gateway answers, long after its timeout (a SHOULD)",
+    "answers-replies": "a HistoricDataQuery REPLY it receives is answered with a REPLY of its own (a SHOULD)",
+    "answers-unsolicited-systems": "an AcousticSystems it receives is answered with its own (a SHOULD)",
+    "unsupported-as-failure": "an AcousticOperation with an operation code it does not know is answered MSG_FAILURE, not UNSUPPORTED",
+    "succeeds-to-unknown": "an AcousticRequest to a destination it does not know ends in SENT (a SHOULD)",
+    "dies-on-compressed-history": "after a CompressedHistory, no request is served",
 }
 
 VARIANTS = {

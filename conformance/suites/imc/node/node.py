@@ -10,10 +10,10 @@ kept (a flood of spoofed Announces cannot push out a contact that keeps talking)
 codec does not judge (nested too deep) is dropped and counted like a malformed one.
 
 Acoustic operations go over a simulated channel: each peer has a range, a reply takes the two-way travel
-time at 1500 m/s, and the modem is busy until the operation ends. Iridium and SMS go to fake gateways that
-always deliver. ``loss`` and ``dup`` drop and repeat datagrams with a seeded generator; loss touches only
+time at 1500 m/s, and the modem is busy until the operation ends. Iridium and SMS go to simulated gateways that
+deliver at once unless a message's data asks them to fail, slow down or vanish (the stand-in's rule: gateway.py). ``loss`` and ``dup`` drop and repeat datagrams with a seeded generator; loss touches only
 the requests and replies of idempotent exchanges (exchanges.json), which a scenario may resend, and never more than
-``LOSS_RUN`` of one message in a row.
+``LOSS_RUN`` copies of one message.
 """
 
 from __future__ import annotations
@@ -31,8 +31,9 @@ from ....kinds.vector.errors import NotJudged
 from ..crc16 import crc16
 from ..definitions import Definitions
 from ....kinds.vector.floats import as_float
-from ..values import text_bytes
+from ..values import raw_bytes, text_bytes
 from ..wire import ImcWire
+from . import gateway
 from .breaks import BREAKS, VARIANTS
 
 SOUND_SPEED = 1500.0  # m/s
@@ -43,7 +44,8 @@ ACOUSTIC_ENTITY = 43
 SERVICE_URL = re.compile(r"imc\+udp://([^:/;]+|\[[0-9a-fA-F:]+\]):([0-9]+)/?")
 MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
-LOSS_RUN = 2  # at most this many datagrams of one message dropped in a row by ``loss``
+LOSS_RUN = 2  # at most this many copies of one message dropped by ``loss``
+MAX_LOSS_KEYS = 4096  # messages whose drops are counted at once (then the count starts again)
 SLOW_TURNAROUND = 4.0  # s a peer's modem takes to answer under the busy-then-completes variant
 # vehicle-traffic: (message id, payload, byte order, every how many 0.2 s ticks) of messages outside the seeds, as a
 # DUNE vehicle streams them (IMC.xml 5.4: EstimatedState's 20 fields, EntityState, CpuUsage, EulerAngles, Temperature),
@@ -76,7 +78,7 @@ class ReferenceNode:
         self.address, self.name, self.system = address, name, system
         self.peers = dict(peers if peers is not None else {"imc-peer-1": 150.0, "imc-peer-2": 1200.0})
         self.loss, self.dup, self.rng, self.broken, self.epoch0 = loss, dup, random.Random(seed), broken, epoch0
-        self.loss_runs: dict[str, int] = {}  # message -> how many of it were dropped in a row
+        self.loss_runs: dict[tuple, int] = {}  # (message, its fields) -> how many copies of it were dropped
         self.queue: list = []
         self.order = itertools.count()
         self.contacts: dict[int, tuple[str, int]] = {}
@@ -116,7 +118,13 @@ class ReferenceNode:
             return
         except ValueError:
             self.dropped += 1
-            return
+            if self.broken != "answers-bad-crc" or len(data) < codec.HEADER_SIZE + 2:
+                return
+            try:  # the broken node recomputes the CRC instead of checking it
+                order = codec.ORDERS[codec.byte_order_of(data)]
+                message = codec.decode(self.defs, data[:-2] + struct.pack(order + "H", crc16(data[:-2])))
+            except (ValueError, KeyError, NotJudged):
+                return
         if self.broken == "leaks-on-drop" and self.dropped >= 5000:
             return
         order = codec.byte_order_of(data)
@@ -221,6 +229,10 @@ class ReferenceNode:
         if self.broken == "two-replies":
             self._reply(t, PROCESSING + 0.1, message, "AcousticSystems", {"list": names})
 
+    def _on_AcousticSystems(self, t: float, message: dict) -> None:
+        if self.broken == "answers-unsolicited-systems":  # a reply taken for a query
+            self._on_AcousticSystemsQuery(t, message)
+
     def _on_SystemGroup(self, t: float, message: dict) -> None:
         """Set and Chg store a group's list of systems, Dis forgets it, Req is answered with a Rep."""
         f = message["fields"]
@@ -270,8 +282,8 @@ class ReferenceNode:
             fields = {"op": self._v("AcousticOperation", "op", name), "system": system, "range": range_, "msg": None}
             self._reply(t, delay, message, "AcousticOperation", fields, entity=ACOUSTIC_ENTITY)
 
-        if op is None and self.broken != "silent-on-unsupported":
-            state(PROCESSING, "UNSUPPORTED")  # an operation the definitions do not have
+        if op is None and self.broken != "silent-on-unsupported":  # an operation the definitions do not have
+            state(PROCESSING, "MSG_FAILURE" if self.broken == "unsupported-as-failure" else "UNSUPPORTED")
         if op not in plans:
             return  # a state (sent by another node), not a request
         distance = self.peers.get(_text(f["system"]))
@@ -297,6 +309,10 @@ class ReferenceNode:
             return
         if self.broken == "wrong-kind-terminal" and op == "RANGE":
             success = "MSG_DONE"
+        if self.broken == "msg-ends-in-range" and op == "MSG":
+            success = "RANGE_RECVED"
+        if self.broken == "silent-on-abort" and op == "ABORT" and distance is not None:
+            return
         travel = 2.0 if distance is None else 2 * distance / SOUND_SPEED + self.turnaround
         if distance is None and self.variant == "queues-operations":  # no answer: it gives up at its acoustic timeout
             travel = float(self.acoustic_timeout)
@@ -348,7 +364,7 @@ class ReferenceNode:
             status(PROCESSING, "INPUT_FAILURE", info="no message to send")
             return
         if distance is None:
-            status(PROCESSING, "INV_ADDR", info="unknown destination")
+            status(PROCESSING, *(("SENT",) if self.broken == "succeeds-to-unknown" else ("INV_ADDR", 0.0, "unknown destination")))
             return
         travel = 2 * distance / SOUND_SPEED + self.turnaround
         timeout = as_float(f["timeout"])
@@ -401,21 +417,35 @@ class ReferenceNode:
         return False
 
     def _on_IridiumMsgTx(self, t: float, message: dict) -> None:
-        req_id = message["fields"]["req_id"]
+        req_id, ttl = message["fields"]["req_id"], message["fields"]["ttl"]
         req_id = (req_id + 1) % 0x10000 if self.broken == "req-id-not-echoed" else req_id
-        late = message["fields"]["ttl"] + 4.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
-        states = ((PROCESSING, "QUEUED"), (0.2 + late, "TRANSMIT"), (0.5 + late, "OK"))
+        late = ttl + 4.0 if self.broken in ("transmits-after-ttl", "late-ok") else 0.0
+        states = ((PROCESSING, "QUEUED", ""), (0.2 + late, "TRANSMIT", ""), (0.5 + late, "OK", ""))
         if self.variant == "slow-iridium-link":  # sent before a ttl of 2 s, its OK 1.8 s after it
-            states = ((PROCESSING, "QUEUED"), (1.9, "TRANSMIT"), (3.8, "OK"))
-        for delay, name in states[::2] if self.broken == "late-ok" else states:
-            fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": ""}
+            states = ((PROCESSING, "QUEUED", ""), (1.9, "TRANSMIT", ""), (3.8, "OK", ""))
+        states = states[::2] if self.broken == "late-ok" else states
+        states = gateway.simulated(self._gateway_mode(message), ttl, states, "TRANSMIT", "EXPIRED", "ERROR", self.broken)
+        for delay, name, text in states:
+            fields = {"req_id": req_id, "status": self._v("IridiumTxStatus", "status", name), "text": text}
             self._reply(t, delay, message, "IridiumTxStatus", fields)
 
     def _on_SmsTx(self, t: float, message: dict) -> None:
         seq = message["fields"]["seq"]
         seq = (seq + 1) % 0x100000000 if self.broken == "seq-not-echoed" else seq
-        for delay, name in ((PROCESSING, "ACCEPTED"), (0.2, "TRANSMITTING"), (0.5, "COMPLETED")):
-            self._reply(t, delay, message, "SmsState", {"seq": seq, "state": self._v("SmsState", "state", name), "error": ""})
+        states = ((PROCESSING, "ACCEPTED", ""), (0.2, "TRANSMITTING", ""), (0.5, "COMPLETED", ""))
+        mode = self._gateway_mode(message)
+        states = gateway.simulated(mode, message["fields"]["timeout"], states, "TRANSMITTING", "INTERRUPTED",
+                                   "REJECTED" if mode == "gone" else "INTERRUPTED", self.broken)
+        for delay, name, error in states:
+            self._reply(t, delay, message, "SmsState", {"seq": seq, "state": self._v("SmsState", "state", name), "error": error})
+
+    def _gateway_mode(self, message: dict) -> str:
+        """What the simulated gateway does with a message: the stand-in's rule (gateway.py), read from its data."""
+        try:
+            mode = gateway.plan(raw_bytes(message["fields"]["data"]))
+        except ValueError:
+            return "ok"
+        return "ok" if self.broken == "ok-when-gateway-fails" and mode in ("fail", "gone") else mode
 
     def _on_HistoricDataQuery(self, t: float, message: dict) -> None:
         f = message["fields"]
@@ -430,9 +460,10 @@ class ReferenceNode:
             self.dropped_ids.add(req_id)
             return
         if kind == "CLEAR":
-            self.kept.clear()
+            if self.broken != "clear-keeps-data":
+                self.kept.clear()
             fields = {"req_id": req_id, "type": f["type"], "max_size": f["max_size"], "data": None}
-        elif kind == "QUERY":
+        elif kind == "QUERY" or kind == "REPLY" and self.broken == "answers-replies":
             fields = {"req_id": req_id, "type": self._v("HistoricDataQuery", "type", "REPLY"), "max_size": f["max_size"],
                       "data": self._historic_data(t, f["max_size"])}
         else:
@@ -452,7 +483,7 @@ class ReferenceNode:
             data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": items}}
             if self.broken == "ignores-max-size" or self.wire.size_of("HistoricDataQuery", "data", data) <= max_size:
                 return data if items or self.broken == "ignores-max-size" else None
-            if not items:
+            if not items or self.broken == "empty-when-small":
                 return None
             items = items[:-1]
 
@@ -470,6 +501,10 @@ class ReferenceNode:
             elif item["abbrev"] == "RemoteCommand":
                 self._on_RemoteCommand(t, dict(message, abbrev="RemoteCommand", fields=item["fields"]))
 
+    def _on_CompressedHistory(self, t: float, message: dict) -> None:
+        """Not read (a reading the seeds leave open: compressed-history-input); the broken node stops serving."""
+        self.exhausted = self.exhausted or self.broken == "dies-on-compressed-history"
+
     def _on_RemoteCommand(self, t: float, message: dict) -> None:
         f = message["fields"]
         if f["destination"] == self.system or self.broken == "executes-others-commands":
@@ -478,6 +513,9 @@ class ReferenceNode:
             if f["destination"] == self.system:
                 return
         if as_float(f["timeout"]) > self.epoch0 + t or self.broken == "keeps-expired-commands":
+            self.kept.append({"abbrev": "RemoteCommand", "fields": f})
+            self._forward(t)
+        elif self.broken == "forwards-expired" and f["destination"] in self.contacts:
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
             self._forward(t)
 
@@ -561,13 +599,17 @@ class ReferenceNode:
 
     def _lost(self, message: dict, reply: bool = False) -> bool:
         """Drop at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
-        in a row of one message (a scenario resends a few times: a link that loses every try is a dead link, not a
-        lossy one)."""
+        copies of one message (a scenario resends a few times: a link that loses every try is a dead link, not a
+        lossy one; counted per message, not per kind, as other traffic between two tries must not reset it)."""
         if not self.loss or not self._idempotent(message, reply):
             return False
-        run = self.loss_runs.get(message["abbrev"], 0)
-        lost = run < LOSS_RUN and self.rng.random() < self.loss
-        self.loss_runs[message["abbrev"]] = run + 1 if lost else 0
+        key = (message["abbrev"], repr(message["fields"]))  # a resent request, or its reply, is the same message
+        dropped = self.loss_runs.get(key, 0)
+        lost = dropped < LOSS_RUN and self.rng.random() < self.loss
+        if lost:
+            if len(self.loss_runs) >= MAX_LOSS_KEYS:
+                self.loss_runs.clear()
+            self.loss_runs[key] = dropped + 1
         return lost
 
     def _idempotent(self, message: dict, reply: bool) -> bool:
