@@ -32,13 +32,18 @@ def outcome(result) -> dict[str, str]:
 
 @pytest.mark.parametrize("edition", ["imc-5.4.30", "imc-5.4.11"])
 def test_a_vehicles_other_traffic_fails_no_scenario_and_is_counted(suite, cases, edition):
+    from imc_conformance.suites.imc.imc_xml import cached_imc_xml
+
     result, _ = run_virtual(suite, cases, edition, kinds=("scenario", "robustness"), variant=TRAFFIC, strict=True)
     reference, _ = run_virtual(suite, cases, edition, kinds=("scenario", "robustness"), strict=True)
+    if cached_imc_xml() is None:  # its HistoricData's inline EstimatedState cannot be read: not judged, never FAIL
+        assert Verdict.FAIL not in {c.verdict for c in result.cases}
+        pytest.skip("the whole IMC.xml is not in the cache")
     assert outcome(result) == {} and result.exit_code() == 0
     verdicts = {c.id: c.verdict for c in result.cases}
     assert {k: v for k, v in verdicts.items() if k in {c.id for c in reference.cases}} == {c.id: c.verdict for c in reference.cases}
     extra = {k: v for k, v in verdicts.items() if k not in {c.id for c in reference.cases}}
-    assert all(k.startswith("imc/HistoricData/passive/") and v == Verdict.PASS for k, v in extra.items())  # its HistoricData
+    assert extra and all(k.startswith("imc/HistoricData/passive/") and v == Verdict.PASS for k, v in extra.items())
     known = next(n for n in result.notes if "messages the suite does not cover (framing checked only)" in n)
     assert all(f"id {i} (" in known for i in (350, 1, 7, 254, 263)) and "id 999" not in known
     undefined = next(n for n in result.notes if "no definition the suite has names" in n)
@@ -154,3 +159,12 @@ def test_a_log_and_watch_judge_such_a_historic_data_alike(suite, whole_xml, tmp_
         judge.received(Datagram(1, 1.7e9, "127.0.0.1", 6002, "127.0.0.1", 6001, frame))
         result = judge.result(implementation="watch", started="", duration=0.0, strict=True, title="watch")
         assert {c.verdict.value for c in result.cases} == {expected[name]}, name
+
+
+def test_without_the_whole_imc_xml_that_traffic_is_not_judged_never_failed(suite, cases, monkeypatch, tmp_path):
+    monkeypatch.setenv("IMC_CONFORMANCE_CACHE", str(tmp_path / "cache"))  # an empty cache: no IMC.xml to read it with
+    result, _ = run_virtual(suite, cases, "imc-5.4.30", kinds=("scenario", "robustness"), variant=TRAFFIC, strict=True)
+    unjudged = {c.id: c.detail for c in result.cases if c.verdict == Verdict.INCONCLUSIVE}
+    assert Verdict.FAIL not in {c.verdict for c in result.cases} and unjudged
+    assert all(k.startswith("imc/HistoricData/passive/") and "the whole IMC.xml is not in the cache" in d
+               for k, d in unjudged.items())
