@@ -50,7 +50,7 @@ def test_a_vehicles_other_traffic_fails_no_scenario_and_is_counted(suite, cases,
     assert "id 999 (" in undefined and "never a failure" in undefined
 
 
-def test_a_recorded_run_with_that_traffic_is_judged_alike_by_pcap(suite, cases, tmp_path):
+def test_a_recorded_run_with_that_traffic_is_judged_alike_by_pcap(suite, cases, tmp_path, whole_xml):
     path, out = tmp_path / "run.pcapng", tmp_path / "judged.json"
     options = dict(EVERYTHING, time_scale=1.0, profile=suite.profile("seed"))
     ids = [c.id for c in cases if c.kind == "scenario"]
@@ -62,8 +62,17 @@ def test_a_recorded_run_with_that_traffic_is_judged_alike_by_pcap(suite, cases, 
     assert main(["pcap", str(path), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     judged = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
-    assert {k: v for k, v in judged.items() if "/capture/" not in k} == {c.id: c.verdict.value for c in live.cases}
-    assert not {k: v for k, v in judged.items() if v not in ("PASS", "IMPL_DEFINED")}
+    unjudged = {k: v for k, v in judged.items() if v not in ("PASS", "IMPL_DEFINED")}
+    alike = {c.id: c.verdict.value for c in live.cases}
+    if whole_xml == "cached":
+        assert not unjudged
+    else:  # its HistoricData's inline EstimatedState cannot be read: not judged, never FAIL (a scenario's window
+        # may end before a frame of it in the recording that the live run saw: those cases are not compared)
+        assert unjudged and all(k.startswith("imc/HistoricData/") and v == "INCONCLUSIVE" for k, v in unjudged.items())
+        assert Verdict.FAIL.value not in alike.values()
+        judged = {k: v for k, v in judged.items() if k not in unjudged}
+        alike = {k: v for k, v in alike.items() if k not in unjudged and v != "INCONCLUSIVE"}
+    assert {k: v for k, v in judged.items() if "/capture/" not in k} == alike
     assert any("id 350 (" in n and "does not cover" in n for n in doc["notes"])
     assert any("id 999 (" in n and "no definition" in n for n in doc["notes"])
 
