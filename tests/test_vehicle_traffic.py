@@ -142,6 +142,13 @@ def test_an_inline_message_outside_the_suite_is_read_with_the_whole_protocol(sui
         assert parsed.decoded["fields"]["data"][0]["fields"]["sample"]["abbrev"] == "EstimatedState"
     else:
         assert parsed.undecided and "the whole IMC.xml is not in the cache" in parsed.problem
+    listed = struct.pack(order + "fffH", 0.7, -0.15, 100.0, 2) + struct.pack(order + "H", 350) + bytes(88) + struct.pack(
+        order + "HB", 7, 12)  # message-list elements outside the suite: an EstimatedState, a CpuUsage
+    elements = suite.wire.parse(sound(suite.defs, suite.defs["HistoricData"].id, listed, order))
+    if whole_xml == "cached":
+        assert [m["abbrev"] for m in elements.decoded["fields"]["data"]] == ["EstimatedState", "CpuUsage"]
+    else:
+        assert elements.undecided and "data[0] holds message id 350" in elements.problem
     undefined = suite.wire.parse(historic(suite.defs, 999, b"", order))  # no IMC.xml has it: the rest cannot be read
     assert undefined.undecided and undefined.problem.startswith("inline-outside-definitions")
     broken = suite.wire.parse(historic(suite.defs, 350, bytes(80), order))  # an EstimatedState 8 bytes short
