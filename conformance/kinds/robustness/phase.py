@@ -176,10 +176,11 @@ class PhaseMachine:
         if self.done:
             return []
         if parsed.problem is not None:
-            self.malformed += 1
+            self.malformed += not parsed.undecided
             if len(self.frames_seen) < self.phase.settings.get("malformed_listed", 20):
                 self.frames_seen.append({"n": len(self.frames_seen) + 1, "message": parsed.message,
-                                         "problem": parsed.problem, "clause": parsed.clause, "t": self._rel(t)})
+                                         "problem": parsed.problem, "clause": parsed.clause, "t": self._rel(t),
+                                         "undecided": parsed.undecided})
         if self.waiting is not None and self.waiting.accepts is not None and parsed.decoded is not None \
                 and self.waiting.accepts(parsed):
             return self._resume(t, epoch, parsed)

@@ -16,6 +16,7 @@ from ...kinds.vector.errors import FrameError, NotJudged
 from . import codec
 from .crc16 import arc  # fastcrc's, called without the wrapper: this is the hot path
 from .definitions import Definitions
+from .elsewhere import defined_elsewhere
 from .wire import NOT_JUDGED_CLAUSE, UNKNOWN_SYSTEM, ImcWire, outside
 
 PORTS = frozenset([*range(6001, 6031), *range(30100, 30105)])  # DUNE's node ports and its discovery ports
@@ -98,7 +99,7 @@ class ImcCaptureRules:
 
     def _decoded(self, p: bytes, group: str) -> Frame:
         try:
-            decoded = codec.decode(self.defs, p)
+            decoded = codec.decode(self.defs, p, elsewhere=defined_elsewhere)
         except FrameError as exc:
             return Frame(group, exc.rule, exc.offset, exc.detail, self.clauses.get(exc.rule, ""))
         except NotJudged as exc:
@@ -117,6 +118,8 @@ class ImcCaptureRules:
         try:
             case["message"] = codec.decode(self.defs, data)
         except FrameError as exc:
+            if exc.rule == "unknown-inline-id":
+                return None  # an inline message outside the suite (a vehicle's other traffic): no verdict to compare with
             return case | {"expect": "invalid", "rule": exc.rule, "clause": self.clauses.get(exc.rule, case["clause"])}
         except NotJudged:
             return None  # beyond the reference codec's bounds: no verdict to compare with

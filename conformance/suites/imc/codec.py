@@ -10,11 +10,18 @@ Every rule has a switch. ``off``: rules not checked, each replaced by what a rea
 (``LENIENT``): the oracle of ``generate --check`` proves with it that an invalid vector breaks exactly the rules
 it names, and the per-rule mutants are the codec with one switch off. ``held``: rules of practice (rules.json
 level "practice", e.g. DUNE's frame cap ``size-limit``) checked too; none is by default.
+
+``elsewhere``: for judging traffic, where inline messages may be any of the protocol's (a HistoricSample holding an
+EstimatedState): the definition of an inline id the definitions lack (the whole IMC.xml's), or why there is none. An inline message
+read with it is framing checked only; an inline id no definition names makes the frame ``NotJudged`` (an inline message
+carries no length: the bytes after its id cannot be placed), never ``unknown-inline-id``, which stays the rule of a
+decoder given only the definitions (the corpus's).
 """
 
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 
 from ...kinds.vector import Span
 from ...kinds.vector.errors import EncodeError, FrameError, NotJudged
@@ -25,6 +32,7 @@ from .unpackers import Irregular, unpackers_of
 from ...kinds.vector.floats import float_from_bits, float_to_bits
 from .values import raw_bytes, text_bytes, text_value
 
+Elsewhere = Callable[[int], "MessageDef | str"]  # an inline id the definitions lack -> its definition, or why none
 HEADER_SIZE = 20
 FOOTER_SIZE = 2
 ORDERS = {"le": "<", "be": ">"}
@@ -145,9 +153,10 @@ def _message_def(defs: Definitions, abbrev) -> MessageDef:
 # ---------------------------------------------------------------- decoding
 
 def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None, *, off: frozenset[str] = NONE,
-           held: frozenset[str] = NONE) -> dict:
-    """The decoded form of ``frame``; raises FrameError. Appends the frame's byte map to ``spans``. ``off`` and
-    ``held``: the rules switched off and the rules of practice held (see the module's docstring)."""
+           held: frozenset[str] = NONE, elsewhere: Elsewhere | None = None) -> dict:
+    """The decoded form of ``frame``; raises FrameError. Appends the frame's byte map to ``spans``. ``off``,
+    ``held`` and ``elsewhere``: the rules switched off, the rules of practice held and where an inline id the
+    definitions lack is looked up (see the module's docstring)."""
     n = len(frame)
     if n < HEADER_SIZE:
         if "header-truncated" not in off:
@@ -190,7 +199,7 @@ def decode(defs: Definitions, frame: bytes, spans: list[Span] | None = None, *, 
         except Irregular:  # the reader names what is wrong
             pass
     if fields is None:
-        fields = _Reader(defs, frame, e, end, spans, off).fields(mdef, HEADER_SIZE, mdef.abbrev)
+        fields = _Reader(defs, frame, e, end, spans, off, elsewhere).fields(mdef, HEADER_SIZE, mdef.abbrev)
     header = {"timestamp": float_from_bits(ts_bits, 8), "src": src, "src_ent": src_ent, "dst": dst, "dst_ent": dst_ent}
     return {"abbrev": mdef.abbrev, "header": header, "fields": fields}
 
@@ -214,8 +223,9 @@ def layout(defs: Definitions, frame: bytes) -> list[Span]:
 
 class _Reader:
     def __init__(self, defs: Definitions, frame: bytes, e: str, end: int, spans: list[Span] | None,
-                 off: frozenset[str] = NONE):
+                 off: frozenset[str] = NONE, elsewhere: Elsewhere | None = None):
         self.defs, self.frame, self.e, self.end, self.spans, self.off = defs, frame, e, end, spans, off
+        self.elsewhere = elsewhere
         self.pos = HEADER_SIZE
         self.depth = 0
 
@@ -277,6 +287,12 @@ class _Reader:
         if mgid == self.defs.null_id:
             return None
         inner = self.defs.by_id.get(mgid)
+        if inner is None and self.elsewhere is not None:
+            inner = self.elsewhere(mgid)
+            if isinstance(inner, str):
+                raise NotJudged("inline-outside-definitions", id_start,
+                                f"{path} holds message id {mgid} ({inner}): an inline message carries no length, so "
+                                "the rest of the frame cannot be read: not judged")
         if inner is None:
             if "unknown-inline-id" in self.off:
                 return None

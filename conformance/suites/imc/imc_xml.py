@@ -67,6 +67,13 @@ def fetch_imc_xml(timeout: float = 300) -> Path:
     return target
 
 
+def cached_imc_xml() -> Path | None:
+    """Path of the IMC.xml if the cache holds the pinned one, else None: never fetched (for judging traffic, which
+    must neither wait on the network nor fail without it)."""
+    target = cache_dir() / f"IMC-imcpy-{IMCPY_VERSION}.xml"
+    return target if _pinned(target, XML_SHA256, SDIST_LIMIT) else None
+
+
 def _pinned(path: Path, sha256: str, limit: int) -> bool:
     """Whether ``path`` holds the bytes of that SHA-256."""
     try:

@@ -10,6 +10,7 @@ from ...kinds.vector.errors import FrameError, NotJudged
 from . import codec
 from .crc16 import crc16
 from .definitions import Definitions, MessageDef
+from .elsewhere import defined_elsewhere
 
 UNKNOWN_SYSTEM, UNKNOWN_ENTITY = 0xFFFF, 0xFF
 DATAGRAM_LIMIT = 65507  # bytes an IPv4 UDP datagram carries
@@ -52,7 +53,7 @@ class ImcWire:
 
     def parse(self, data: bytes) -> Parsed:
         try:
-            decoded = codec.decode(self.defs, data)
+            decoded = codec.decode(self.defs, data, elsewhere=defined_elsewhere)
         except FrameError as exc:
             mgid = self.id_in_header(data) if exc.rule == "unknown-id" else None
             if mgid is not None and mgid != self.defs.null_id:  # sound (decode checks the CRC first), not ours

@@ -87,7 +87,7 @@ VARIANTS = {
     "declines-reverse-range": "AcousticOperation and AcousticRequest REVERSE_RANGE are answered UNSUPPORTED (not supported)",
     "answers-queries-for-others": "queries addressed to another system or to 0 are answered too (as DUNE); configuration only when addressed to it",
     "trusts-unannounced": "a system that never announced itself is served, replies going to the address its datagram came from",
-    "vehicle-traffic": "streams a vehicle's other traffic to each contact, as DUNE does to its consoles: EstimatedState, EntityState and CpuUsage at 5 Hz, EulerAngles and Temperature (big-endian) at 1 Hz, and a frame of an id no IMC.xml has",
+    "vehicle-traffic": "streams a vehicle's other traffic to each contact, as DUNE does to its consoles: EstimatedState, EntityState and CpuUsage at 5 Hz, EulerAngles and Temperature (big-endian) at 1 Hz, a HistoricData whose HistoricSample holds an EstimatedState at 1 Hz, and a frame of an id no IMC.xml has",
     "queues-operations": "AcousticOperations that find the modem busy are queued and carried out one at a time, not answered BUSY; one to a system not on the acoustic channel takes its acoustic timeout (10 s, as DUNE)",
     "slow-iridium-link": "an Iridium message is transmitted 1.9 s after the request and its OK reaches the suite 3.8 s after it (1.8 s after a ttl of 2 s: the node's checking period and a slow link)",
     "reused-id-replaces": "an AcousticRequest reusing the req_id of an outstanding one replaces it: nothing more is said of the first, the second is carried out",

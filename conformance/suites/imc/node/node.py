@@ -49,7 +49,7 @@ MAX_LOSS_KEYS = 4096  # messages whose drops are counted at once (then the count
 SLOW_TURNAROUND = 4.0  # s a peer's modem takes to answer under the busy-then-completes variant
 # vehicle-traffic: (message id, payload, byte order, every how many 0.2 s ticks) of messages outside the seeds, as a
 # DUNE vehicle streams them (IMC.xml 5.4: EstimatedState's 20 fields, EntityState, CpuUsage, EulerAngles, Temperature),
-# and an id no IMC.xml defines (999: a newer or private message)
+# and an id no IMC.xml defines (999: a newer or private message); with them a HistoricData (``_historic_traffic``)
 TRAFFIC_TICK = 0.2
 TRAFFIC = ((350, bytes(88), "<", 1), (1, bytes([1, 0]) + struct.pack("<H", 6) + b"Active", "<", 1),
            (7, bytes([12]), "<", 1), (254, bytes(40), "<", 5), (263, struct.pack(">f", 14.5), ">", 5),
@@ -590,12 +590,18 @@ class ReferenceNode:
         """The frames of its other traffic due at this tick (vehicle-traffic), to anyone: messages the seeds do not
         define, so built from their ids and payloads."""
         out = []
-        for mgid, payload, e, every in TRAFFIC:
+        for mgid, payload, e, every in (*TRAFFIC, self._historic_traffic()):
             if self.ticks % every == 0:
                 body = struct.pack(e + "HHHdHBHB", self.defs.sync, mgid, len(payload), self.epoch0 + t, self.system, 0,
                                    UNKNOWN_SYSTEM, UNKNOWN_ENTITY) + payload
                 out.append(body + struct.pack(e + "H", crc16(body)))
         return out
+
+    def _historic_traffic(self) -> tuple[int, bytes, str, int]:
+        """A HistoricData of its data store, as ``TRAFFIC`` holds them: one HistoricSample holding an EstimatedState
+        (a message the seeds do not define, inline: read with the whole IMC.xml), once a second."""
+        sample = struct.pack("<HHbhhhhH", self.defs["HistoricSample"].id, self.system, 0, 1, 2, 3, 4, 350) + bytes(88)
+        return self.defs["HistoricData"].id, struct.pack("<fffH", 0.7, -0.15, 100.0, 1) + sample, "<", 5
 
     def _lost(self, message: dict, reply: bool = False) -> bool:
         """Drop at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
