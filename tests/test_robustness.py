@@ -62,6 +62,8 @@ def test_frames_are_readdressed_with_their_defects_kept(suite, cases, reference)
         elif frame.expect == "invalid" and parsed.outside is not None:  # a sound frame of an id nothing defines:
             assert by_id[frame.case_id]["rule"] == "unknown-id" and parsed.undefined  # a decoder refuses it, a
             # live link counts it as another system's traffic, judged no further
+        elif frame.expect == "invalid" and parsed.undecided:  # an inline id no IMC.xml defines: the rest of the
+            assert by_id[frame.case_id]["rule"] == "unknown-inline-id", frame.case_id  # frame is unreadable, not judged
         elif frame.expect == "invalid":
             assert parsed.problem and parsed.problem.startswith(by_id[frame.case_id]["rule"] + " "), frame.case_id
 

@@ -18,25 +18,12 @@ target) so the sequence reads top to bottom; the driver below turns events into 
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
-from ..scenario.exchanges import exchange_for, seconds
-from ..scenario.matchers import hashable, same
-from ..scenario.values import Scope, Unresolved, resolve_message
 from ..scenario.wire import Addressing, Composed, Parsed
-
-FLOOD_ENTITY = 254  # the entity the replayed frames come from, so replies to them never look like a probe's
-
-
-@dataclass(frozen=True)
-class Frame:
-    """A frame to replay: the corpus case it comes from, its encoding and what the case expects of it."""
-
-    case_id: str
-    encoding: str
-    expect: str
-    data: bytes
-    addressed: bool = False  # sent as it is (a hostile block's), not readdressed to come from the session
+from .hostile import Hostile
+from .probing import Probing
+from .script import FLOOD_ENTITY, Frame, Probe, Restart, Send, Wait
 
 
 @dataclass
@@ -110,35 +97,10 @@ def as_scenario(case: dict) -> dict:
     return dict(case, steps=steps)
 
 
-@dataclass
-class Probe:
-    program: ProbeProgram
-    baseline: bool = False
-    down: bool = False  # silenced, and not served again since (no restart)
-    silencings: list = field(default_factory=list)  # after what it stopped answering, and what bisecting found
-    hostile: list = field(default_factory=list)  # the hostile blocks after which it stopped answering
-    hostile_run: int = 0  # how many hostile blocks it was asked after
-    blind: str | None = None  # why an unanswered round could not be judged (the link could not show everything)
-    garbage: str | None = None  # what the garbage did to it
-    error: str | None = None  # why its request cannot be sent
+class PhaseMachine(Probing, Hostile):
+    """The phase for every robustness case of the run: the session's events in, frames to send out, each probe's
+    findings kept."""
 
-
-@dataclass(frozen=True)
-class _Send:
-    composed: Composed
-
-
-@dataclass(frozen=True)
-class _Wait:
-    until: float
-    accepts: object = None  # Parsed -> bool, or None: only time ends the wait
-
-
-class _Restart:
-    pass
-
-
-class PhaseMachine:
     def __init__(self, phase: Phase, members: list[ProbeProgram], addressing: Addressing, unique):
         self.phase, self.addressing, self.unique = phase, addressing, unique
         self.probes = [Probe(m) for m in members]
@@ -152,7 +114,7 @@ class PhaseMachine:
         self.epoch = 0.0
         self.done = False
         self.restart_wanted = False
-        self.waiting: _Wait | None = None
+        self.waiting: Wait | None = None
         self.impairments: list[str] = []  # what the link could not show, in order
         self.replayed: list[Frame] = []  # the frames replayed since the last round (a queueing node works them off)
         self.requests_in: dict[bytes, str | None] = {}  # a replayed frame -> the exchange it opens as a request
@@ -214,9 +176,9 @@ class PhaseMachine:
             while True:
                 item = self._script.send(value)
                 value = None
-                if isinstance(item, _Send):
+                if isinstance(item, Send):
                     out.append(item.composed)
-                elif isinstance(item, _Wait):
+                elif isinstance(item, Wait):
                     self.waiting = item
                     return out
                 else:
@@ -279,19 +241,19 @@ class PhaseMachine:
             rng = random.Random(settings["seed"])
             source = (self.addressing.system, FLOOD_ENTITY)
             for data in self.wire.garbage(rng, settings["garbage"], source, self._node()):
-                yield _Send(Composed(data, {}, "", None))
-                yield _Wait(self.now + self._scaled(settings["garbage_pace"]))
-            yield _Wait(self.now + self._scaled(settings["settle"]))
+                yield Send(Composed(data, {}, "", None))
+                yield Wait(self.now + self._scaled(settings["garbage_pace"]))
+            yield Wait(self.now + self._scaled(settings["settle"]))
             self._log("garbage", f"{settings['garbage']} garbage datagrams sent (seed {settings['seed']})")
             for probe in (yield from self._round(self._listening(), "after the garbage")):
                 probe.down, probe.garbage = True, f"the {settings['garbage']} garbage datagrams"
         if self.phase.can_restart and (restarted or any(p.down for p in self.probes)):
-            problem = yield _Restart()  # leave the target as it was found
+            problem = yield Restart()  # leave the target as it was found
             self._log("restart", "restarted to leave the target running" if problem is None else problem)
 
     def _revive(self, probes: list[Probe]):
         """Restart the node after a bisection; whether the probes are served again (else the phase stops)."""
-        problem = yield _Restart()
+        problem = yield Restart()
         if problem is None and (yield from self._round(probes, "after a restart, before going on", self._revival())):
             problem = "after a restart the node did not serve the probe again"
         if problem is not None:
@@ -304,70 +266,21 @@ class PhaseMachine:
     def _listening(self) -> list[Probe]:
         return [p for p in self.probes if p.baseline and not p.down and not p.error]
 
-    def _hostile(self) -> list[tuple[str, list[Frame]]]:
-        """The hostile blocks of the settings, made of the listening probes' own requests (their effects are the
-        run's to allow), each as the block's kind says: addressed to anyone, to 0 or to the session's second system;
-        from the node's own id or from a system the session never announced; sent twice byte for byte; several
-        times with one id; many at once with fresh ids (idempotent requests only: a node may queue the others)."""
-        out = []
-        for kind in self.phase.settings.get("hostile", ()):
-            frames = []
-            for probe in self._listening():
-                spec = probe.program.case["probe"]
-                if "send" in spec and not (kind.get("idempotent_only") and not self._idempotent(spec)):
-                    frames += self._flood(kind, probe, spec)
-            if frames:
-                out.append((kind["id"], frames))
-        return out
-
-    def _flood(self, kind: dict, probe: Probe, spec: dict) -> list[Frame]:
-        """One probe's request as a hostile block of ``kind`` takes it."""
-        to = {"anyone": 0xFFFF, "zero": 0, "other": self.addressing.other}.get(kind.get("dst"))
-        src = {"node": self._node(), "stranger": self.addressing.stranger}.get(kind.get("src"), self.addressing.system)
-        speaker = replace(self.addressing, system=src, entity=FLOOD_ENTITY)
-        fixed: dict = {}
-        unique = (lambda name: fixed.setdefault(name, self.unique(name))) if kind.get("same_ids") else self.unique
-        out = []
-        for i in range(kind.get("copies", 1)):
-            scope = Scope(dict(self.phase.params), unique, self.epoch, addresses=self.addressing.symbols())
-            try:
-                message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
-                if to is not None:
-                    message["header"] = {"dst": to}
-                data = self.wire.compose(message, spec.get("encoding"), speaker, self.epoch + i * 0.001, "hostile",
-                                         self.phase.edition).data
-            except (Unresolved, ValueError):
-                return []  # the probe itself cannot be sent either: its own error says why
-            copies = 2 if kind.get("duplicate") else 1
-            out += [Frame(f"hostile/{kind['id']}/{probe.program.case_id}", spec.get("encoding", "le"), "valid", data,
-                          addressed=True)] * copies
-        return out
-
-    def _idempotent(self, spec: dict) -> bool:
-        """Whether a probe's request is safe to send many times (its exchange says so)."""
-        scope = Scope(dict(self.phase.params), lambda name: 0, self.epoch, addresses=self.addressing.symbols())
-        try:
-            message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
-        except Unresolved:
-            return False
-        exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
-        return bool(exchange and exchange.get("idempotent"))
-
     def _replay(self, frames: list[Frame]):
         pace, source = self._scaled(self.phase.settings["pace"]), (self.addressing.system, FLOOD_ENTITY)
         for frame in frames:
             data = frame.data if frame.addressed else self.wire.readdress(frame.data, frame.encoding, source, self._node())
-            yield _Send(Composed(data, {}, "", frame.encoding))
-            yield _Wait(self.now + pace)
+            yield Send(Composed(data, {}, "", frame.encoding))
+            yield Wait(self.now + pace)
         self.replayed = frames
-        yield _Wait(self.now + self._scaled(self.phase.settings["settle"]))
+        yield Wait(self.now + self._scaled(self.phase.settings["settle"]))
 
     def _bisect(self, block: list[Frame], probes: list[Probe]):
         """Restart, replay half of the block, probe; keep the half that silences a probe, down to one frame; what
         it found."""
         candidates = block
         while True:
-            problem = yield _Restart()
+            problem = yield Restart()
             if problem is None and (yield from self._round(probes, "after a restart, before bisecting further",
                                                            self._revival())):
                 problem = "after a restart the node did not serve the probe again"
@@ -384,124 +297,6 @@ class PhaseMachine:
                 self._log("bisect", what)
                 return what
             candidates = half if silent else candidates[len(half):]
-
-    # ------------------------------------------------------------------ probing
-
-    def _round(self, probes: list[Probe], when: str, patience: float = 0.0):
-        """Ask every probe at once (and again, up to each probe's tries, and for ``patience`` seconds: a node just
-        restarted may take a while to serve again) and wait for the replies that show each request kind is served;
-        the probes that got none."""
-        waiting, until, attempt = {id(p): p for p in probes}, self.now + patience, 0
-        tries = dict.fromkeys(waiting, 0)
-        queues = {id(p): self._queue(p.program.case["probe"], self.replayed) for p in probes}
-        self.replayed = []
-        impaired = len(self.impairments)
-        while waiting:
-            attempt += 1
-            asked = {}
-            for probe in waiting.values():
-                spec = probe.program.case["probe"]
-                if attempt > spec.get("tries", 2) and self.now >= until:
-                    continue
-                tries[id(probe)] += 1
-                accepts, composed = self._ask(probe, spec)
-                if composed is not None:
-                    yield _Send(composed)
-                wait = self._bound(spec, queues[id(probe)] if attempt == 1 else None)
-                asked[id(probe)] = (probe, accepts, self.now + self._scaled(wait))
-            if not asked:
-                break
-            while asked:
-                got = yield _Wait(min(d for _, _, d in asked.values()),
-                                  lambda parsed: any(a(parsed) for _, a, _ in asked.values()))
-                for key, (probe, accepts, deadline) in list(asked.items()):
-                    if got is not None and accepts(got):
-                        self._log("probe", f"{when}: {got.message} received" + (f" (try {attempt})" if attempt > 1 else ""),
-                                  probe)
-                        del asked[key], waiting[key]
-                        got = None
-                    elif deadline <= self.now:
-                        del asked[key]
-        blind = "; ".join(dict.fromkeys(self.impairments[impaired:]))
-        for key, probe in waiting.items():
-            spec = probe.program.case["probe"]
-            self._log("probe", f"{when}: no {spec.get('expect') or spec.get('alive')} within "
-                               f"{self._said(spec, queues[key])} ({tries[key]} tries)"
-                      + (f"; not judged: {blind}" if blind else ""), probe)
-            if blind:
-                probe.blind = probe.blind or f"{when}: {blind}"
-        return [] if blind else list(waiting.values())
-
-    def _queue(self, spec: dict, frames: list[Frame]) -> int:
-        """How many of the frames just replayed are requests of the probe's own exchange, which a node may queue
-        and work off one at a time before it answers the probe (the probe's ``queued`` bound each); 0 for a probe
-        without one."""
-        if "queued" not in spec or "send" not in spec:
-            return 0
-        wanted = self._exchange_of(spec)
-        count = 0
-        for frame in frames:
-            key = frame.data
-            if key not in self.requests_in:
-                parsed = self.wire.parse(frame.data)
-                exchange = None if parsed.decoded is None else exchange_for(
-                    self.phase.exchanges, self.wire, {"abbrev": parsed.message, "fields": parsed.fields}, self.phase.edition)
-                self.requests_in[key] = exchange and exchange["id"]
-            count += wanted is not None and self.requests_in[key] == wanted
-        return count
-
-    def _exchange_of(self, spec: dict) -> str | None:
-        scope = Scope(dict(self.phase.params), lambda name: 0, self.epoch, addresses=self.addressing.symbols())
-        try:
-            message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
-        except Unresolved:
-            return None
-        exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
-        return exchange and exchange["id"]
-
-    def _bound(self, spec: dict, queued: int | None) -> float:
-        """A probe's wait, in unscaled seconds: its own bound, and on its first try its ``queued`` bound for each
-        request of its kind the node may still be working off."""
-        own = seconds(spec["within"], self.phase.bounds)
-        return own + queued * seconds(spec["queued"], self.phase.bounds) if queued else own
-
-    def _said(self, spec: dict, queued: int) -> str:
-        own = seconds(spec["within"], self.phase.bounds)
-        if not queued:
-            return f"{own:g} s"
-        each = seconds(spec["queued"], self.phase.bounds)
-        return (f"{own + queued * each:g} s ({own:g} s, and {each:g} s for each of the {queued} "
-                f"request{'s' if queued != 1 else ''} of its kind just replayed, which a node may queue: bound "
-                f"{spec['queued']})")
-
-    def _ask(self, probe: Probe, spec: dict):
-        """(what accepts the reply, the request to send or None) for one try of a probe."""
-        if "alive" in spec:
-            wanted = spec["alive"]
-            return (lambda p: (wanted is None or p.message == wanted) and self.addressing.from_node(self.wire, p)), None
-        scope = Scope(dict(self.phase.params), self.unique, self.epoch,
-                      addresses=self.addressing.symbols())
-        try:
-            message = resolve_message(spec["send"], scope, self.wire, self.phase.edition)
-            composed = self.wire.compose(message, spec.get("encoding"), self.addressing, self.epoch, "probe",
-                                         self.phase.edition)
-        except (Unresolved, ValueError) as exc:
-            probe.error = f"the probe cannot be sent: {exc}"
-            return (lambda p: False), None
-        exchange = exchange_for(self.phase.exchanges, self.wire, message, self.phase.edition)
-        echoes = [(r["reply_field"], composed.decoded["fields"].get(r["request_field"]))
-                  for r in (exchange or {}).get("correlation", ()) if r["kind"] == "echo"]
-        if echoes:
-            self.keys.append((spec["expect"], tuple((f, hashable(v)) for f, v in echoes)))
-        me = (self.addressing.system, self.addressing.entity)
-
-        def accepts(p: Parsed) -> bool:
-            if p.message != spec["expect"] or not self.addressing.from_node(self.wire, p):
-                return False
-            if echoes:
-                return all(same(p.fields.get(f), v) for f, v in echoes)
-            return tuple(self.wire.destination(p) or ()) == me
-        return accepts, composed
 
     def _node(self) -> int:
         return 0xFFFF if self.addressing.node is None else self.addressing.node
