@@ -26,11 +26,11 @@ from .suites import load_suite
 from .suites.data_suite import manifest, not_as_built, read_document
 
 
-def read_json(path: Path, error=ValueError):
-    """The bytes and the value of a JSON file (``inputs.read_json``: bounded in size and nesting); ``error`` with
-    one line naming the file if it cannot be read."""
+def read_json(path: Path, error=ValueError, unique: bool = False):
+    """The bytes and the value of a JSON file (``inputs.read_json``: bounded in size and nesting; ``unique``: a key
+    given twice in an object refused); ``error`` with one line naming the file if it cannot be read."""
     try:
-        return inputs.read_json(path)
+        return inputs.read_json(path, unique=unique)
     except ValueError as exc:
         raise error(str(exc)) from None
 
@@ -138,7 +138,7 @@ def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
 def load_waivers(path: Path, cases: list, rules: set[str], today: dt.date) -> tuple[Waivers, list[str], dict]:
     """The waivers in force, notes on the expired ones, and what a result records of the file (its name as given,
     the SHA-256 of its bytes, how many waivers were in force). ``cases``: the whole corpus; ``rules``: the suite's."""
-    raw, doc = read_json(Path(path), WaiverError)
+    raw, doc = read_json(Path(path), WaiverError, unique=True)  # a file that says what to waive
     problem = schema_error(VECTORS / "schema" / "waivers.schema.json", doc, str(path))
     if problem:
         raise WaiverError(problem)

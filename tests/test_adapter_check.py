@@ -141,3 +141,23 @@ def test_run_and_fuzz_of_an_adapter_implementing_nothing_exit_2_saying_so(comman
     assert "UNSUPPORTED" in out and "PASS" not in out.split("cases in")[-1] and "agrees" not in out, out
     assert "imc-conformance: nothing could be tested: " in err and '"unsupported"' in err, err
     assert len(err.strip().splitlines()) == 1, err
+
+
+def test_a_program_flooding_its_output_with_mistaken_lines_is_read_no_further_than_a_bound():
+    """A program writing wrong answers without end (here: an id no request has, as fast as it can) is not read until
+    the hello's wait is over, keeping every line: the check stops after a bounded number of mistakes."""
+    from imc_conformance.adaptercheck.wire import Line
+
+    class Flood:
+        read = 0
+
+        def next_event(self, wait):
+            self.read += 1
+            assert self.read <= 1000, "read on and on"
+            return "line", b'{"id": 0, "ok": true}'
+
+    channel = Flood()
+    line = Line(channel, timeout=30.0)
+    answers, mistakes = line.collect({1}, "hello", arrays=False)
+    assert answers == {} and line.stopped and line.ended
+    assert {m.code for m in mistakes} == {"wrong-id"} and len(mistakes) == channel.read < 1000

@@ -96,3 +96,52 @@ def test_a_node_whose_gateway_succeeds_whatever_happens_is_caught_on_sms_too(sui
     assert verdicts["imc/IridiumMsgTx/scenario/gateway-gone"] == "NON_STRICT"
     result, _ = run_virtual(suite, cases, broken="error-without-text", kinds=("scenario",))
     assert {c.id: c.verdict.value for c in result.cases}["imc/SmsTx/scenario/gateway-fails"] == "NON_STRICT"
+
+
+def test_a_request_that_trickles_in_is_cut_at_its_deadline_whatever_each_read_takes():
+    """A client sending a byte at a time resets a socket's own timeout at every byte: the stand-in's deadline is
+    for the whole request (a clock the test moves, no waiting)."""
+    import socket
+
+    from imc_conformance.suites.imc.node.gateway import _Deadline
+
+    now = [0.0]
+    ours, theirs = socket.socketpair()
+    with ours, theirs:
+        reader = _Deadline(ours, 10.0, clock=lambda: now[0])
+        buffer = bytearray(4)
+        theirs.sendall(b"P")
+        assert reader.readinto(buffer) == 1
+        now[0] = 9.0
+        theirs.sendall(b"O")
+        assert reader.readinto(buffer) == 1 and ours.gettimeout() == pytest.approx(1.0)
+        now[0] = 10.0
+        theirs.sendall(b"S")
+        with pytest.raises(TimeoutError):
+            reader.readinto(buffer)
+
+
+def test_connections_beyond_the_limit_are_reset_not_given_a_thread_each(monkeypatch):
+    import socket
+
+    from imc_conformance.suites.imc.node import gateway as module
+
+    monkeypatch.setattr(module, "MAX_CONNECTIONS", 2)
+    lines = []
+    server = GatewayServer(("127.0.0.1", 0), log=lines.append)
+    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    held = [socket.create_connection(server.server_address[:2], timeout=5) for _ in range(2)]
+    try:
+        extra = socket.create_connection(server.server_address[:2], timeout=5)
+        with extra:
+            try:
+                assert extra.recv(1) == b""
+            except ConnectionResetError:
+                pass
+        assert any("more than 2 connections" in line for line in lines)
+    finally:
+        for sock in held:
+            sock.close()
+        server.stop()
+        thread.join(5)

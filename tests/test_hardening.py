@@ -375,6 +375,15 @@ def test_waivers_with_typos_or_duplicates_are_refused(tmp_path, capsys, entries,
     one_line_error(capsys.readouterr().err, fragment)
 
 
+def test_a_waiver_giving_a_key_twice_is_refused(tmp_path, capsys):
+    """JSON leaves unsaid which of two equal keys counts: a waiver with two globs (one matching everything) or two
+    expiry dates must not be read as either."""
+    path = tmp_path / "waivers.json"
+    path.write_text('{"waivers": [{"glob": "*", "reason": "r", "glob": "imc/LblRange/*"}]}')
+    assert main(["run", "--adapter", "imcpy", "--no-progress", "--message", "LblRange", "--waivers", str(path)]) == 2
+    one_line_error(capsys.readouterr().err, "the key 'glob' is given twice")
+
+
 # ---------------------------------------------------------------- 15. a cut stderr says so
 
 def test_a_long_stderr_says_it_was_cut_and_by_how_much(hostile, capsys):

@@ -157,6 +157,10 @@ def test_a_mistaken_impairment_is_one_line(text, message):
     (["udp://127.0.0.1:6010", "--vehicle", "udp://255.255.255.255:6002"], "is not a loopback address"),
     (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6002", "--via", "0.0.0.0:0"], "0.0.0.0 is not a loopback"),
     (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6002", "--to-console", "corrupt=2"], "--to-console: corrupt"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6010", "--duration", "0.1"],
+     "is the relay's own socket (relay)"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6011", "--via", "127.0.0.1:6011", "--duration", "0.1"],
+     "is the relay's own socket (--via)"),
 ])
 def test_the_relay_refuses_in_one_line(argv, message, capsys):
     assert main(["relay", *argv]) == 2

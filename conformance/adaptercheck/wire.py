@@ -14,6 +14,7 @@ from .mistakes import Mistake
 
 HELLO_ID, UNKNOWN_OP_ID = 1, 2
 UNKNOWN_OP = "adapter-check-unknown-op"
+MISTAKES_READ = 100  # mistaken lines read in one wait before the check stops reading (a program flooding its output)
 EOF_WAIT = 3.0  # seconds a program has to exit once its input ended (the contract: answer what is in flight, exit 0)
 
 
@@ -24,7 +25,7 @@ class Line:
         self.channel, self.timeout = channel, timeout
         self.ended = False  # nothing more is read: the program ended (or closed its output), or the check stopped
         self.closed = False  # the check closed the program's input (its end of input, as at the end of a run)
-        self.stopped = False  # the check stopped reading (a line over the bound), not the program
+        self.stopped = False  # the check stopped reading (a line over the bound, a flood of mistakes), not the program
 
     def collect(self, wanted: set[int], where: str, *, arrays: bool, timeout: float | None = None):
         """The answers to ``wanted`` ids that came (each its reply object), and the mistakes in what came; waits
@@ -34,6 +35,9 @@ class Line:
         wait = self.timeout if timeout is None else timeout
         deadline = time.monotonic() + wait
         while not self.ended and set(wanted) - set(answers):
+            if len(mistakes) >= MISTAKES_READ:  # a flood: what was read shows the mistake; reading on would not end
+                self.ended = self.stopped = True
+                break
             event = self.channel.next_event(deadline - time.monotonic())
             if event is None:
                 break

@@ -91,6 +91,9 @@ def command(args) -> int:
     via_family, via = loopback(via_text, "--via", bind=True)
     if vfamily != via_family:
         raise UsageError(f"--via {via_text} and --vehicle {args.vehicle} are not of the same address family")
+    if vehicle[:2] in (listen[:2], via[:2]):  # the relay would carry its own datagrams as the vehicle's
+        own = "relay" if vehicle[:2] == listen[:2] else "--via"
+        raise UsageError(f"--vehicle {args.vehicle} is the relay's own socket ({own}): give the vehicle's address")
     suite, rules, edition = capture_rules(args)
     try:
         sockets = {"console": bound_socket(family, listen, f"relay {args.listen}")}

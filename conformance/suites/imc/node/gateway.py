@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import binascii
 import http.server
+import io
 import ipaddress
 import socket
 import struct
@@ -30,7 +31,8 @@ MARK = b"imc-conformance:gateway="
 MODES = ("ok", "fail", "slow", "gone")
 LOOKED_AT = 256  # bytes of a message searched for the mark
 MAX_BODY = 1 << 20  # bytes of a post read at most
-READ_TIMEOUT = 10.0  # seconds a post may take to arrive
+READ_TIMEOUT = 10.0  # seconds a post may take to arrive, all of it (a client dribbling bytes gets no more)
+MAX_CONNECTIONS = 32  # connections handled at once; any beyond are reset
 SLOW, GONE = 30.0, 60.0  # default seconds: how late a slow gateway answers, how long a gone one stays away
 
 
@@ -113,7 +115,26 @@ class GatewayServer(http.server.ThreadingHTTPServer):
         self.default, self.slow, self.gone, self.log = default, slow, gone, log or (lambda line: None)
         self.away_until = 0.0
         self.stopping = threading.Event()
+        self.slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
         super().__init__(address, _Post)
+
+    def process_request(self, request, client_address) -> None:
+        """A thread per connection, at most MAX_CONNECTIONS at once: any beyond are reset, not queued."""
+        if not self.slots.acquire(blocking=False):
+            self.log(f"{client_address[0]}: more than {MAX_CONNECTIONS} connections at once: reset")
+            _reset(request)
+            return
+        try:
+            super().process_request(request, client_address)
+        except BaseException:
+            self.slots.release()
+            raise
+
+    def process_request_thread(self, request, client_address) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self.slots.release()
 
     def verify_request(self, request, client_address) -> bool:
         if time.monotonic() < self.away_until:  # gone: the connection is reset, as a closed port refuses one
@@ -131,9 +152,33 @@ class GatewayServer(http.server.ThreadingHTTPServer):
         self.server_close()
 
 
+class _Deadline(io.RawIOBase):
+    """A connection's reading side that gives up ``seconds`` after it began, however the bytes trickle in (the
+    socket's own timeout is per read: a client sending a byte at a time would hold the connection for ever)."""
+
+    def __init__(self, sock, seconds: float, clock=time.monotonic):
+        self.sock, self.clock = sock, clock
+        self.until = clock() + seconds
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer) -> int:
+        left = self.until - self.clock()
+        if left <= 0:
+            raise TimeoutError("the request took longer than the stand-in waits for one")
+        self.sock.settimeout(left)
+        return self.sock.recv_into(buffer)
+
+
 class _Post(http.server.BaseHTTPRequestHandler):
     server: GatewayServer
     timeout = READ_TIMEOUT
+
+    def setup(self) -> None:
+        super().setup()
+        self.rfile.close()
+        self.rfile = io.BufferedReader(_Deadline(self.connection, READ_TIMEOUT))
 
     def do_POST(self):  # noqa: N802 (the http.server naming)
         try:
