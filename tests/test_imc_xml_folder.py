@@ -167,7 +167,9 @@ def test_a_custom_imc_xml_gives_a_pcap_judgement_that_reflects_its_changes(tmp_p
     assert verdicts == {"imc/Extra/capture/frame/valid": "PASS", "imc/Holder/capture/frame/valid": "PASS"}
     verdicts, notes = judged(first)  # the XML before the change: Extra unknown, Holder's fp64 depth misread
     assert "imc/Extra/capture/frame/valid" not in verdicts and "id 3 (1)" in " ".join(notes)
-    assert "imc/Holder/capture/frame/valid" not in verdicts and "FAIL" in verdicts.values()
+    # Holder's fp64 depth read as fp32 leaves its inline message's id among depth's last bytes (0): an inline id no
+    # definition has makes the rest of the frame unreadable, so the frame is not judged (never PASS, never FAIL)
+    assert verdicts == {"imc/Holder/capture/frame/inline-outside-definitions": "INCONCLUSIVE"}
     capsys.readouterr()
     assert main(["pcap", str(tmp_path / "c.pcap"), "--vectors", str(tmp_path / "nowhere")]) == 2
     assert "no such directory" in capsys.readouterr().err
