@@ -58,3 +58,17 @@ def run_virtual(suite, cases, edition=None, options=None, strict=False, kinds=("
     result = run_cases(session, suite, scenario_cases(cases, kinds=kinds), edition=edition, adapter="virtual",
                        options=options, strict=strict, clock=link.now, started="2026-01-01T00:00:00+00:00")
     return result, link
+
+
+def recorded_run(suite, cases, path, **node_options):
+    """The result of the scenarios (seed profile, edition 5.4.30) against a node made with ``node_options``, recorded
+    as a live run records it into the pcapng ``path`` (for ``pcap`` to judge again)."""
+    from imc_conformance.capture.recording import Recorder, about_run
+
+    options = dict(EVERYTHING, time_scale=1.0, profile=suite.profile("seed"))
+    ids = [c.id for c in cases if c.kind == "scenario"]
+    recorder = Recorder(path, about_run("imc", "imc-5.4.30", ids, options, "udp://127.0.0.1:6002", None, None, 10.0))
+    try:
+        return run_virtual(suite, cases, "imc-5.4.30", options=options, recorder=recorder, **node_options)[0]
+    finally:
+        recorder.close(complete=True)

@@ -12,7 +12,7 @@ import pytest
 from imc_conformance.core.verdicts import Verdict
 from imc_conformance.kinds.robustness.phase import PhaseMachine
 
-from live_harness import run_virtual
+from live_harness import recorded_run, run_virtual
 
 PROBE = "imc/AcousticOperation/robustness/still-served"
 
@@ -65,19 +65,10 @@ def test_a_reused_request_id_replacing_or_cancelling_is_a_reading_live_and_in_it
     from its recording by the passive exchange rules; each shows the reading reused-request-id."""
     import json
 
-    from imc_conformance.capture.recording import Recorder, about_run
     from imc_conformance.cli import main
 
-    from live_harness import EVERYTHING
-
     path, out = tmp_path / "run.pcapng", tmp_path / "judged.json"
-    options = dict(EVERYTHING, time_scale=1.0, profile=suite.profile("seed"))
-    ids = [c.id for c in cases if c.kind == "scenario"]
-    recorder = Recorder(path, about_run("imc", "imc-5.4.30", ids, options, "udp://127.0.0.1:6002", None, None, 10.0))
-    try:
-        live, _ = run_virtual(suite, cases, "imc-5.4.30", options=options, recorder=recorder, variant=variant)
-    finally:
-        recorder.close(complete=True)
+    live = recorded_run(suite, cases, path, variant=variant)
     case = next(c for c in live.cases if c.id == "imc/AcousticRequest/scenario/reused-id")
     assert case.verdict is Verdict.IMPL_DEFINED and any(k.check.endswith(":reading-reused-request-id") for k in case.checks)
     assert main(["pcap", str(path), "--json", str(out)]) == 0

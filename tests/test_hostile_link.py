@@ -8,7 +8,6 @@ import json
 import select
 import signal
 import socket
-import struct
 import subprocess
 import sys
 

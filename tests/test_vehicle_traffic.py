@@ -9,14 +9,13 @@ import struct
 
 import pytest
 
-from imc_conformance.capture.recording import Recorder, about_run
 from imc_conformance.cli import main
 from imc_conformance.core.verdicts import Verdict
 from imc_conformance.suites.imc import codec
 from imc_conformance.suites.imc.crc16 import crc16
 from imc_conformance.suites.imc.node import ReferenceNode
 
-from live_harness import EVERYTHING, NODE, run_virtual
+from live_harness import NODE, recorded_run, run_virtual
 
 TRAFFIC = "vehicle-traffic"
 
@@ -52,13 +51,7 @@ def test_a_vehicles_other_traffic_fails_no_scenario_and_is_counted(suite, cases,
 
 def test_a_recorded_run_with_that_traffic_is_judged_alike_by_pcap(suite, cases, tmp_path, whole_xml):
     path, out = tmp_path / "run.pcapng", tmp_path / "judged.json"
-    options = dict(EVERYTHING, time_scale=1.0, profile=suite.profile("seed"))
-    ids = [c.id for c in cases if c.kind == "scenario"]
-    recorder = Recorder(path, about_run("imc", "imc-5.4.30", ids, options, "udp://127.0.0.1:6002", None, None, 10.0))
-    try:
-        live, _ = run_virtual(suite, cases, "imc-5.4.30", options=options, recorder=recorder, variant=TRAFFIC)
-    finally:
-        recorder.close(complete=True)
+    live = recorded_run(suite, cases, path, variant=TRAFFIC)
     assert main(["pcap", str(path), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     judged = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}

@@ -9,7 +9,6 @@ import shlex
 from ..core.causes import Cause
 from ..core.results import INTERRUPTED, CaseResult, RunResult
 from ..core.verdicts import ATTENTION, UNTESTED, Verdict
-from ..wording import counted
 
 VERDICTS = tuple(Verdict)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)

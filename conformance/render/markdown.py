@@ -7,7 +7,8 @@ import re
 from ..core.verdicts import Verdict
 from ..core.results import RunResult
 from ..escaping import clean
-from .common import TIMELINE_LIMIT, attention, cause_numbers, counted, errata_text, incident_lines, overall, provenance_lines, verdict_columns
+from ..wording import counted
+from .common import TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines, verdict_columns
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",

@@ -14,7 +14,8 @@ from rich.table import Table
 from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
 from ..escaping import printable
-from .common import cause_line, counted, incident_lines, provenance_lines, timeline_lines
+from ..wording import counted
+from .common import cause_line, incident_lines, provenance_lines, timeline_lines
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
 SHOWN_FAILURES = 20

@@ -163,7 +163,7 @@ def schemas() -> str:
     for path in sorted((VECTORS / "schema").glob("*.schema.json")):
         doc = json.loads(path.read_text(encoding="utf-8"))
         out += [f"## `{path.name}`", "", f"**{_escape(doc.get('title', ''))}**. {_escape(doc.get('description', ''))}", "",
-                f'??? note "The schema"', "", "    ```json",
+                '??? note "The schema"', "", "    ```json",
                 *("    " + line for line in path.read_text(encoding="utf-8").rstrip("\n").split("\n")), "    ```", ""]
     return "\n".join(out)
 

@@ -54,12 +54,19 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--fuzz-only", action="store_true", help="only the live fuzzing (no scenario runs)")
     parser.add_argument("--checkout", type=Path, default=Path.cwd(), help="the checkout holding tests/")
     args = parser.parse_args(argv)
+    outside = outside_namespace(argv, "conformance", "make dune-conformance")
+    return outside if outside is not None else _run(args)
+
+
+def outside_namespace(argv: list[str], command_name: str, shown: str) -> int | None:
+    """The exit code of a DUNE command (``command_name``) started outside its private network namespace: 2 when DUNE
+    is not built, else that of the command run again inside a namespace made for it; None inside one."""
     if not built():
-        print("make dune-conformance: DUNE is not built here: run `make dune` first", file=sys.stderr)
+        print(f"{shown}: DUNE is not built here: run `make dune` first", file=sys.stderr)
         return 2
     if os.environ.get(INSIDE) != "1":
-        return _in_namespace(argv)
-    return _run(args)
+        return _in_namespace(argv, command_name)
+    return None
 
 
 def _in_namespace(argv: list[str], command_name: str = "conformance") -> int:
@@ -282,11 +289,9 @@ def record(argv: list[str]) -> int:
     parser.add_argument("--log-out", type=Path, default=Path("reports/dune-log"),
                         help="where to move the vehicle's mission log folders (default reports/dune-log)")
     args = parser.parse_args(argv)
-    if not built():
-        print("dune record: DUNE is not built here: run `make dune` first", file=sys.stderr)
-        return 2
-    if os.environ.get(INSIDE) != "1":
-        return _in_namespace(argv, "record")
+    outside = outside_namespace(argv, "record", "dune record")
+    if outside is not None:
+        return outside
     import socket
 
     problem = _isolate()

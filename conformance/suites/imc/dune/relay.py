@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import signal
 import sys
 import time
 from pathlib import Path
 
-from .build import built, home, source
-from .conformance import INSIDE, _in_namespace, _isolate
+from .build import home, source
+from .conformance import _isolate, outside_namespace
 from .world import CONFIG_DIR, UDP_MESSAGES, dune_argv, forget_state, start, stop
 
 VEHICLE, CONSOLE = "lauv-xplore-3", "lauv-xplore-2"
@@ -93,11 +92,9 @@ def main(argv: list[str]) -> int:
                         help="the console: a second DUNE, the suite's own session (its HistoricDataQuery scenarios), "
                              "or both in turn (default)")
     args = parser.parse_args(argv)
-    if not built():
-        print("make dune-relay: DUNE is not built here: run `make dune` first", file=sys.stderr)
-        return 2
-    if os.environ.get(INSIDE) != "1":
-        return _in_namespace(argv, "relay")
+    outside = outside_namespace(argv, "relay", "make dune-relay")
+    if outside is not None:
+        return outside
     signal.signal(signal.SIGTERM, _interrupted)
     problem = _isolate()
     if problem:
