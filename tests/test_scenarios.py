@@ -86,6 +86,8 @@ CAUGHT = {
     "unsupported-as-failure": ("imc/AcousticOperation/scenario/unsupported-op-no-other-state", "FAIL"),
     "succeeds-to-unknown": ("imc/AcousticRequest/scenario/unknown-destination-never-succeeds", "NON_STRICT"),
     "dies-on-compressed-history": ("imc/HistoricDataQuery/scenario/compressed-history", "FAIL"),
+    "repeat-range-drops-both": ("imc/AcousticOperation/scenario/two-ranges-one-system", "FAIL"),
+    "lists-other-names": ("imc/AcousticOperation/scenario/range-listed-system", "NON_STRICT"),
 }
 
 
@@ -107,6 +109,7 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "slow-iridium-link": set(),  # its late OK is within the register's bound "link"
     "reused-id-replaces": {"reused-request-id"},  # the first, replaced, says nothing more
     "reused-id-cancels": {"reused-request-id"},  # the second, cancelling the first, is not carried out
+    "repeat-range-replaces": {"two-requests-one-system"},  # one terminal for two RANGEs to one system
 }
 
 
