@@ -575,3 +575,17 @@ def test_a_malformed_answer_to_the_request_decides_its_step_at_once(suite, cases
     case = next(c for c in result.cases if c.id == "imc/AcousticSystemsQuery/scenario/reply")
     assert case.verdict is Verdict.FAIL and "is malformed: crc" in case.detail
     assert verdicts(result)["imc/AcousticStatus/passive/AcousticRequest/scenario/range"] == "FAIL"
+
+
+def test_a_counting_step_takes_only_what_its_only_holds_and_names_real_fields(suite, cases):
+    """``only`` on an expect step: frames whose fields do not hold it are ignored (two RANGEs to one system: the
+    progress states are not taken for terminal ones, so the reference node passes); the lint refuses a field the
+    message lacks."""
+    case = next(c.data for c in cases if c.id == "imc/AcousticOperation/scenario/two-ranges-one-system")
+    step = dict(case["steps"][2], only={"nope": 1})
+    problem = suite.live_problem("scenario", dict(case, steps=[*case["steps"][:2], step]))
+    assert problem is not None and problem[0] == ".steps[2].only.nope" and "no field" in problem[1]
+    result, _ = run_virtual(suite, cases, kinds=("scenario",))
+    found = next(c for c in result.cases if c.id == case["id"])
+    assert found.verdict is Verdict.PASS
+    assert any(e.get("note") == "not what the step counts (its only)" for e in found.timeline)
