@@ -86,6 +86,8 @@ CAUGHT = {
     "unsupported-as-failure": ("imc/AcousticOperation/scenario/unsupported-op-no-other-state", "FAIL"),
     "succeeds-to-unknown": ("imc/AcousticRequest/scenario/unknown-destination-never-succeeds", "NON_STRICT"),
     "dies-on-compressed-history": ("imc/HistoricDataQuery/scenario/compressed-history", "FAIL"),
+    "repeat-range-drops-both": ("imc/AcousticOperation/scenario/two-ranges-one-system", "FAIL"),
+    "lists-other-names": ("imc/AcousticOperation/scenario/range-listed-system", "NON_STRICT"),
 }
 
 
@@ -107,6 +109,7 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "slow-iridium-link": set(),  # its late OK is within the register's bound "link"
     "reused-id-replaces": {"reused-request-id"},  # the first, replaced, says nothing more
     "reused-id-cancels": {"reused-request-id"},  # the second, cancelling the first, is not carried out
+    "repeat-range-replaces": {"two-requests-one-system"},  # one terminal for two RANGEs to one system
 }
 
 
@@ -572,3 +575,17 @@ def test_a_malformed_answer_to_the_request_decides_its_step_at_once(suite, cases
     case = next(c for c in result.cases if c.id == "imc/AcousticSystemsQuery/scenario/reply")
     assert case.verdict is Verdict.FAIL and "is malformed: crc" in case.detail
     assert verdicts(result)["imc/AcousticStatus/passive/AcousticRequest/scenario/range"] == "FAIL"
+
+
+def test_a_counting_step_takes_only_what_its_only_holds_and_names_real_fields(suite, cases):
+    """``only`` on an expect step: frames whose fields do not hold it are ignored (two RANGEs to one system: the
+    progress states are not taken for terminal ones, so the reference node passes); the lint refuses a field the
+    message lacks."""
+    case = next(c.data for c in cases if c.id == "imc/AcousticOperation/scenario/two-ranges-one-system")
+    step = dict(case["steps"][2], only={"nope": 1})
+    problem = suite.live_problem("scenario", dict(case, steps=[*case["steps"][:2], step]))
+    assert problem is not None and problem[0] == ".steps[2].only.nope" and "no field" in problem[1]
+    result, _ = run_virtual(suite, cases, kinds=("scenario",))
+    found = next(c for c in result.cases if c.id == case["id"])
+    assert found.verdict is Verdict.PASS
+    assert any(e.get("note") == "not what the step counts (its only)" for e in found.timeline)

@@ -151,7 +151,7 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params, statem
                     return where + ".release", problem
         elif kind == "sequence":
             return where, "a sequence needs reply_to"
-        matchers = [(key, step.get(key, {})) for key in ("fields", "terminal")]
+        matchers = [(key, step.get(key, {})) for key in ("fields", "only", "terminal")]
         matchers += [(f"on_state.{state}", more) for state, more in step.get("on_state", {}).items()]
         for key, specs in matchers:
             for name, spec in specs.items():

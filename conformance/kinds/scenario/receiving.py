@@ -20,6 +20,9 @@ class Receiving:
 
     def _on_expect(self, t: float, step: StepState, parsed: Parsed) -> None:
         spec = step.spec
+        if "only" in spec and self._match_fields(spec["expect"], spec["only"], parsed) is not None:
+            self._log(t, "ignored", parsed, "not what the step counts (its only)")
+            return
         step.replies.append(parsed)
         self.scope.replies[spec["id"]] = parsed.fields
         self._log(t, "received", parsed, "matched")

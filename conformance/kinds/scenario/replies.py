@@ -14,21 +14,29 @@ class Replies:
     """The scenario machine's reading of replies (a mixin of ``Machine``)."""
 
     def _answered_step(self, parsed: Parsed) -> str | None:
-        """The send step whose request this reply echoes (by the exchange's echo fields), if any; else, for a reply
+        """The send step whose request this reply echoes (by the exchange's echo fields; of requests echoing the same
+        values, the one the current step awaits), if any; else, for a reply
         addressed to the session's second system, or to a requester of an exchange without echo fields, the
         latest request sent from that address that such a reply answers."""
         if parsed.decoded is None:
             return None
         to = self.wire.destination(parsed)
         by_address = None
+        awaited = self.step.spec.get("reply_to") if self.step is not None else None
+        order = sorted(self.sent, key=lambda s: s != awaited)  # requests echoing the same values: the awaited one's
+        for step_id in order:
+            composed = self.sent[step_id]
+            exchange = self.program.exchange_for({"abbrev": composed.message, "fields": composed.decoded["fields"]})
+            echoes = [r for r in exchange.get("correlation", ()) if r["kind"] == "echo"] if exchange else []
+            if (echoes and exchange["reply"] == parsed.message and all(
+                    same(parsed.fields.get(r["reply_field"]), composed.decoded["fields"].get(r["request_field"]))
+                    for r in echoes)):
+                return step_id
         for step_id, composed in self.sent.items():
             exchange = self.program.exchange_for({"abbrev": composed.message, "fields": composed.decoded["fields"]})
             if not exchange or exchange["reply"] != parsed.message:
                 continue
             echoes = [r for r in exchange.get("correlation", ()) if r["kind"] == "echo"]
-            if echoes and all(same(parsed.fields.get(r["reply_field"]), composed.decoded["fields"].get(r["request_field"]))
-                              for r in echoes):
-                return step_id
             if to is not None and tuple(to) == self.sent_from[step_id] and (to[0] == self.addressing.other or not echoes):
                 by_address = step_id
         return by_address

@@ -17,7 +17,8 @@ class Acoustic:
     """The reference node's acoustic requests (a mixin of ``ReferenceNode``)."""
 
     def _on_AcousticSystemsQuery(self, t: float, message: dict) -> None:
-        names = ",".join(self.peers) + ("," if self.broken == "list-empty-items" else "")
+        names = ",".join(n.upper() if self.broken == "lists-other-names" else n for n in self.peers)
+        names += "," if self.broken == "list-empty-items" else ""
         self._reply(t, PROCESSING, message, "AcousticSystems", {"list": names})
         if self.broken == "two-replies":
             self._reply(t, PROCESSING + 0.1, message, "AcousticSystems", {"list": names})
@@ -35,10 +36,11 @@ class Acoustic:
                  "MSG": ("MSG_IP", "MSG_DONE", "MSG_FAILURE"), "MSG_SHORT": ("MSG_IP", "MSG_DONE", "MSG_FAILURE"),
                  "ABORT": ("ABORT_IP", "ABORT_ACKED", "ABORT_TIMEOUT")}
         system = "imc-other-system" if self.broken == "wrong-system" else f["system"]
+        tag = next(self.order)
 
         def state(delay: float, name: str, range_: float = 0.0) -> None:
             fields = {"op": self._v("AcousticOperation", "op", name), "system": system, "range": range_, "msg": None}
-            self._reply(t, delay, message, "AcousticOperation", fields, entity=ACOUSTIC_ENTITY)
+            self._reply(t, delay, message, "AcousticOperation", fields, entity=ACOUSTIC_ENTITY, tag=tag)
 
         if op is None and self.broken != "silent-on-unsupported":  # an operation the definitions do not have
             state(PROCESSING, "MSG_FAILURE" if self.broken == "unsupported-as-failure" else "UNSUPPORTED")
@@ -47,6 +49,8 @@ class Acoustic:
         distance = self.peers.get(text_of(f["system"]))
         if distance is None and self.variant == "silent-to-unknown-systems":
             return  # it cannot route the request
+        if op == "RANGE" and self._repeated_range(t, text_of(f["system"])):
+            return
         if t < self.modem_free_at:
             if self.variant == "queues-operations":  # carried out once the operations before it are done
                 self._on_AcousticOperation(self.modem_free_at, message)
@@ -75,6 +79,8 @@ class Acoustic:
         if distance is None and self.variant == "queues-operations":  # no answer: it gives up at its acoustic timeout
             travel = float(self.acoustic_timeout)
         self.modem_free_at = t + travel
+        if op == "RANGE":
+            self.ranging[text_of(f["system"])] = (tag, t + travel)
         if self.variant == "queued-first" and progress == "MSG_IP":
             state(PROCESSING / 2, "MSG_QUEUED")
         state(PROCESSING, progress)
@@ -84,6 +90,20 @@ class Acoustic:
             state(travel, success if reached else failure)
         else:
             state(travel, success, float(distance) if "RANGE" in op else 0.0)
+
+    def _repeated_range(self, t: float, system: str) -> bool:
+        """A RANGE to a system a RANGE is still under way to: whether it is dealt with here. The seeds leave one
+        terminal or two open (two-requests-one-system): usually the second finds the modem busy (BUSY); it may
+        replace the first (repeat-range-replaces: nothing more is said of the first, the second is carried out);
+        broken, the node drops both (neither ends)."""
+        under_way = self.ranging.get(system)
+        if under_way is None or under_way[1] <= t or (self.variant != "repeat-range-replaces"
+                                                       and self.broken != "repeat-range-drops-both"):
+            return False
+        self.cancelled.add(under_way[0])  # the first says nothing more of itself
+        self.modem_free_at = t
+        del self.ranging[system]
+        return self.broken == "repeat-range-drops-both"
 
     def _on_AcousticRequest(self, t: float, message: dict) -> None:
         if self.acoustic_dead:

@@ -73,6 +73,8 @@ BREAKS = {
     "unsupported-as-failure": "an AcousticOperation with an operation code it does not know is answered MSG_FAILURE, not UNSUPPORTED",
     "succeeds-to-unknown": "an AcousticRequest to a destination it does not know ends in SENT (a SHOULD)",
     "dies-on-compressed-history": "after a CompressedHistory, no request is served",
+    "repeat-range-drops-both": "a RANGE AcousticOperation to a system a RANGE is under way to drops both: neither ends",
+    "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 
 VARIANTS = {
@@ -92,4 +94,5 @@ VARIANTS = {
     "slow-iridium-link": "an Iridium message is transmitted 1.9 s after the request and its OK reaches the suite 3.8 s after it (1.8 s after a ttl of 2 s: the node's checking period and a slow link)",
     "reused-id-replaces": "an AcousticRequest reusing the req_id of an outstanding one replaces it: nothing more is said of the first, the second is carried out",
     "reused-id-cancels": "an AcousticRequest reusing the req_id of an outstanding one cancels it: the first ends in ERROR, the second is not carried out",
+    "repeat-range-replaces": "a RANGE AcousticOperation to a system a RANGE is under way to replaces it: nothing more is said of the first, the second is carried out",
 }

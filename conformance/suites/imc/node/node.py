@@ -80,6 +80,7 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
         self.groups: dict[str, object] = {}  # SystemGroup: group name -> its list of systems
         self.kept: list[dict] = []  # RemoteCommands kept for resending
         self.requests: dict[int, tuple] = {}  # AcousticRequest req_id -> (its tag, when it ends, it, its end state)
+        self.ranging: dict[str, tuple] = {}  # AcousticOperation RANGE under way: system -> (its tag, when it ends)
         self.cancelled: set[int] = set()  # tags of queued frames not to send (reused-id-cancels)
         self.queries: deque = deque()  # when the latest HistoricDataQueries came (drops-when-many, exhausted-by-many)
         self.dropped_ids: set[int] = set()  # the req_ids of the QUERYs dropped (drops-when-many)
