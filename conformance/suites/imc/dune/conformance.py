@@ -54,18 +54,25 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--fuzz-only", action="store_true", help="only the live fuzzing (no scenario runs)")
     parser.add_argument("--checkout", type=Path, default=Path.cwd(), help="the checkout holding tests/")
     args = parser.parse_args(argv)
-    outside = outside_namespace(argv, "conformance", "make dune-conformance")
-    return outside if outside is not None else _run(args)
+    done = entered(argv, "conformance", "make dune-conformance")
+    return done if done is not None else _run(args)
 
 
-def outside_namespace(argv: list[str], command_name: str, shown: str) -> int | None:
-    """The exit code of a DUNE command (``command_name``) started outside its private network namespace: 2 when DUNE
-    is not built, else that of the command run again inside a namespace made for it; None inside one."""
+def entered(argv: list[str], command_name: str, shown: str, terminable: bool = True) -> int | None:
+    """None once a DUNE command (``command_name``) runs in its own private network namespace, isolated (a SIGTERM
+    interrupting it when ``terminable``); else its exit code: 2 when DUNE is not built or the namespace is not
+    private, or that of the command run again inside a namespace made for it."""
     if not built():
         print(f"{shown}: DUNE is not built here: run `make dune` first", file=sys.stderr)
         return 2
     if os.environ.get(INSIDE) != "1":
         return _in_namespace(argv, command_name)
+    if terminable:
+        signal.signal(signal.SIGTERM, _interrupted)
+    problem = _isolate()
+    if problem:
+        print(f"{shown}: {problem}", file=sys.stderr)
+        return 2
     return None
 
 
@@ -94,11 +101,6 @@ def _interrupted(signum, frame):
 
 
 def _run(args) -> int:
-    signal.signal(signal.SIGTERM, _interrupted)
-    problem = _isolate()
-    if problem:
-        print(f"make dune-conformance: {problem}", file=sys.stderr)
-        return 2
     args.reports.mkdir(parents=True, exist_ok=True)
     began = time.monotonic()
     codes = {}
@@ -289,15 +291,11 @@ def record(argv: list[str]) -> int:
     parser.add_argument("--log-out", type=Path, default=Path("reports/dune-log"),
                         help="where to move the vehicle's mission log folders (default reports/dune-log)")
     args = parser.parse_args(argv)
-    outside = outside_namespace(argv, "record", "dune record")
-    if outside is not None:
-        return outside
+    done = entered(argv, "record", "dune record", terminable=False)
+    if done is not None:
+        return done
     import socket
 
-    problem = _isolate()
-    if problem:
-        print(f"dune record: {problem}", file=sys.stderr)
-        return 2
     args.out.parent.mkdir(parents=True, exist_ok=True)
     sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sink.bind(("127.0.0.1", RECORD_PORT))

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 from .build import home, source
-from .conformance import _isolate, outside_namespace
+from .conformance import entered
 from .world import CONFIG_DIR, UDP_MESSAGES, dune_argv, forget_state, start, stop
 
 VEHICLE, CONSOLE = "lauv-xplore-3", "lauv-xplore-2"
@@ -92,14 +92,9 @@ def main(argv: list[str]) -> int:
                         help="the console: a second DUNE, the suite's own session (its HistoricDataQuery scenarios), "
                              "or both in turn (default)")
     args = parser.parse_args(argv)
-    outside = outside_namespace(argv, "relay", "make dune-relay")
-    if outside is not None:
-        return outside
-    signal.signal(signal.SIGTERM, _interrupted)
-    problem = _isolate()
-    if problem:
-        print(f"make dune-relay: {problem}", file=sys.stderr)
-        return 2
+    done = entered(argv, "relay", "make dune-relay")
+    if done is not None:
+        return done
     args.reports.mkdir(parents=True, exist_ok=True)
     codes = {}
     try:
@@ -118,10 +113,6 @@ def main(argv: list[str]) -> int:
                 counts[case["verdict"]] = counts.get(case["verdict"], 0) + 1
         print(f"dune-relay {name}: exit {codes[name]}; " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))
     return 0 if all(code in (0, 1) for code in codes.values()) else 2
-
-
-def _interrupted(signum, frame):
-    raise KeyboardInterrupt
 
 
 def _pair(args, name: str, spec: str, session: bool = False) -> int:
