@@ -5,8 +5,6 @@ nor fails without it."""
 
 from __future__ import annotations
 
-from functools import cache
-
 from ...cache import cache_dir
 from ...inputs import read_bytes
 from ...limits import XML_LIMIT
@@ -29,13 +27,19 @@ def defined_elsewhere(mgid: int) -> MessageDef | str:
     return mdef if mdef is not None else f"no IMC.xml the suite has defines message id {mgid}"
 
 
-@cache
+_READ: dict[str, Definitions] = {}  # cache folder -> the definitions of the IMC.xml it holds
+
+
 def _cached_whole(root: str) -> Definitions | str:
-    """The cached IMC.xml's definitions (read once per cache folder), or why they cannot be had."""
+    """The cached IMC.xml's definitions (read once per cache folder, once it holds the file: a fetch made later, by
+    ``--suite imc-full`` or another run, is seen), or why they cannot be had."""
+    if root in _READ:
+        return _READ[root]
     path = cached_imc_xml()
     if path is None:
         return "the whole IMC.xml is not in the cache (`--suite imc-full` fetches it)"
     try:
-        return parse_definitions(xml_document(read_bytes(path, XML_LIMIT)))
+        _READ[root] = parse_definitions(xml_document(read_bytes(path, XML_LIMIT)))
     except (XmlError, ValueError, LookupError, TypeError) as exc:
         return f"the cached IMC.xml cannot be read: {exc}"
+    return _READ[root]
