@@ -28,6 +28,16 @@ def wrong(mode: str) -> list[str]:
     return ["--adapter-cmd", shlex.join([sys.executable, str(WRONG), mode]), "--timeout", "10"]
 
 
+def checked(suite, cases, mode: str, timeout: float):
+    """adapter-check's outcome for the wrong adapter ``mode``, its hello awaited 1 s."""
+    session = SubprocessSession([sys.executable, str(WRONG), mode], name=mode, encoding_param="byte_order",
+                                hello_timeout=1)
+    try:
+        return check_adapter(session, suite, cases, "imc-5.4.30", timeout=timeout)
+    finally:
+        session.close()
+
+
 @pytest.mark.parametrize("mode, code, seen", [
     ("wrong-rule", "wrong-rule", "refused naming rule 'crc'; the input breaks field-overrun only"),
     ("negative-zero", "negative-zero", "header.timestamp: expected -0.0, answered 0"),
@@ -66,12 +76,7 @@ def test_the_reference_and_the_built_in_adapters_speak_the_contract(capsys, args
 def test_output_held_back_until_the_input_ends_is_explained(suite, cases):
     """A program whose answers wait in a buffer answers hello only once its input is closed, whatever the wait (it
     never answers before): adapter-check closes it after the hello's bound and names the buffering."""
-    session = SubprocessSession([sys.executable, str(WRONG), "unflushed"], name="unflushed", encoding_param="byte_order",
-                                hello_timeout=1)
-    try:
-        outcome = check_adapter(session, suite, cases, "imc-5.4.30", timeout=10)
-    finally:
-        session.close()
+    outcome = checked(suite, cases, "unflushed", timeout=10)
     assert [m.code for m in outcome.mistakes] == ["unflushed"]
     assert '"implementation": "hostile reference codec"' in outcome.mistakes[0].seen
 
@@ -87,12 +92,7 @@ def test_an_implementation_exception_on_a_null_list_element_answered_internal_is
 def test_a_program_that_ends_once_the_check_closed_its_input_is_not_said_to_have_ended_early(suite, cases):
     """No hello answer: adapter-check closes the input to look for buffered output, and the program then exits, as the
     contract asks at the end of input. The mistake is the missing answer, never "the program ended before answering"."""
-    session = SubprocessSession([sys.executable, str(WRONG), "silent"], name="silent", encoding_param="byte_order",
-                                hello_timeout=1)
-    try:
-        outcome = check_adapter(session, suite, cases, "imc-5.4.30", timeout=2)
-    finally:
-        session.close()
+    outcome = checked(suite, cases, "silent", timeout=2)
     assert [(m.code, m.seen) for m in outcome.mistakes] == [
         ("hello-late", "no answer within 1 s, nor once adapter-check closed its input; it then exited, as it should at "
                        "the end of input")]
