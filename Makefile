@@ -33,7 +33,7 @@ reference: $(VENV)/.installed
 # workflow (.github/workflows/release.yml) publishes them.
 dist: $(VENV)/.installed
 	rm -rf dist
-	$(VENV)/bin/python -m build --outdir dist .
+	$(VENV)/bin/python -m build --quiet --outdir dist .
 	$(VENV)/bin/python -m twine check --strict dist/*
 
 # The screenshot of the HTML report the README and the manual show (Debian's chromium), taken again.
