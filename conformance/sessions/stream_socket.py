@@ -19,7 +19,8 @@ import time
 from urllib.parse import urlsplit
 
 from ..core.session import AdapterStartError
-from .subprocess import Channel, SubprocessSession, read_lines
+from .channel import Channel, read_lines
+from .subprocess import SubprocessSession
 
 
 def parse_address(url: str) -> tuple[list[tuple[int, object]], str]:
