@@ -34,13 +34,12 @@ The adapter reports the str imcpy gives; it does not recover the bytes from the 
 from __future__ import annotations
 
 import struct
-from importlib.metadata import version
 from math import isfinite
 from operator import attrgetter
 
 import imcpy
 
-from imc_conformance.adapter_api import Rejected, Unsupported
+from imc_conformance.adapter_api import Rejected, Unsupported, installed_version
 from imc_conformance.suites.imc.definitions import Definitions, FieldDef, MessageDef, load_definitions
 from imc_conformance.kinds.vector.floats import float_from_bits, float_to_bits
 from imc_conformance.suites.imc.values import raw_bytes, text_bytes
@@ -172,7 +171,7 @@ class ImcpyAdapter:
         return conv
 
     def hello(self) -> dict:
-        return {"implementation": f"imcpy {version('imcpy')} (DUNE C++ codec, IMC {imcpy.constants.VERSION})",
+        return {"implementation": f"imcpy {installed_version(imcpy)} (DUNE C++ codec, IMC {imcpy.constants.VERSION})",
                 "suites": [SUITE], "byte_orders": ["le"], "errata": "imcpy"}
 
     def encode(self, suite: str, message: dict, byte_order: str) -> bytes:

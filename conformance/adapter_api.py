@@ -22,3 +22,19 @@ class Rejected(Exception):
 
 class Unsupported(Exception):
     """The implementation lacks this capability (an operation, a byte order, a message)."""
+
+
+def installed_version(module) -> str:
+    """The version of the distribution that installed ``module`` (a top-level package): from the name of the
+    ``NAME-VERSION.dist-info`` folder an installer writes beside it, else from ``importlib.metadata``. Read so first
+    because importing and searching ``importlib.metadata`` costs more than the rest of a one-message run's start."""
+    import os
+
+    root, prefix = os.path.dirname(os.path.dirname(module.__file__)), module.__name__.lower() + "-"
+    for entry in os.listdir(root):
+        found = entry[len(prefix):-len(".dist-info")]
+        if entry.lower().startswith(prefix) and entry.endswith(".dist-info") and found and "-" not in found:
+            return found
+    from importlib.metadata import version
+
+    return version(module.__name__)

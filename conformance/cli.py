@@ -7,7 +7,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import commands
 from .errors import CorpusError, UsageError
 from .escaping import printable
 
@@ -37,6 +36,10 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action=_Version, help="show the version and exit")
     sub = parser.add_subparsers(dest="command", required=True)
     wanted = next((a for a in argv or () if not a.startswith("-")), None)
+    if wanted is None and argv and argv[0] == "--version":  # answered while parsing: no command is needed
+        return parser
+    from . import commands
+
     if wanted is not None and wanted not in commands.COMMANDS and wanted not in commands.suite_commands():
         wanted = None
     commands.add(sub, wanted)

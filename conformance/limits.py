@@ -4,7 +4,7 @@ reader of untrusted input stops at its bound with a one-line reason."""
 
 from __future__ import annotations
 
-from .core.shards import SHARDS_MAX  # shards a selection may be split into (--shard K/N), as a saved result may say
+from .core.bounds import SHARDS_MAX  # shards a selection may be split into (--shard K/N), as a saved result may say
 
 STARTUP_MAX = 3600.0  # seconds a live run waits for its target to show itself
 TIME_SCALE_MAX = 1000.0  # the factor on a live run's time bounds (--time-scale)

@@ -497,7 +497,7 @@ def test_the_benchmark_says_plainly_when_it_misses_a_target():
                                     "render json": 5e-6})
     assert lines == ["target --version, whole process: 61 ms (<= 100 ms): met; before: 354 ms",
                      "target in-process, imcpy: 36,230 cases/s (>= 40,000 cases/s): MISSED; before: 17,328 cases/s",
-                     "target in-process, imcpy vs imcpy's bare calls: 2.5 x (<= 1.75 x): MISSED; before: 5.8 x",
+                     "target in-process, imcpy vs imcpy's bare calls: 2.50 x (<= 1.75 x): MISSED; before: 5.8 x",
                      "target JSON report per case: 5 us (<= 10 us): met",
                      "target capture judged, whole command: 66,667 frames/s (>= 150,000 frames/s): MISSED; "
                      "before: 61,614 frames/s"]

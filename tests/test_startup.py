@@ -58,6 +58,30 @@ def test_the_command_line_imports_nothing_heavy_to_start():
     assert done.stdout.strip() == "[]"
 
 
+
+def loaded_after(code: str) -> set[str]:
+    """The modules a fresh interpreter holds after running ``code`` (which imports the CLI as ``cli``)."""
+    done = subprocess.run([sys.executable, "-c", f"import sys, io, contextlib, imc_conformance.cli as cli\n{code}\n"
+                           "print(' '.join(sys.modules))"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return set(done.stdout.split())
+
+
+def test_version_imports_no_command():
+    loaded = loaded_after("with contextlib.suppress(SystemExit): cli.main(['--version'])")
+    assert {m for m in loaded if m.startswith(("imc_conformance.commands", "imc_conformance.suites"))} == set()
+
+
+def test_a_run_of_byte_vectors_imports_no_live_kind_and_no_build_tools():
+    """A run of one message with a library adapter: the case kinds it does not plan, the native build tools, and
+    importlib.metadata (the adapter's version is read from its installed folder's name) stay unloaded."""
+    loaded = loaded_after("with contextlib.redirect_stdout(io.StringIO()): "
+                          "cli.main(['run', '--adapter', 'imcpy', '--message', 'LblRange', '--no-progress'])")
+    assert "imc_conformance.kinds.vector" in loaded
+    assert {"imc_conformance.kinds.scenario.machine", "imc_conformance.kinds.robustness", "imc_conformance.native",
+            "importlib.metadata", "tarfile"} & loaded == set()
+
+
 # ---------------------------------------------------------------- shards
 
 def test_shards_partition_the_selection_by_case_id():

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import subprocess
-import sys
 import tempfile
 import time
 
 from ..files import open_corpus
-from .measure import COUNTS, EDITION, command_env, timed
+from .measure import COUNTS, EDITION, command, command_env, timed
 
 
 def fuzz_rows(suite, everything) -> dict[str, float]:
@@ -41,8 +40,8 @@ def fuzz_rows(suite, everything) -> dict[str, float]:
     out["imcpy bare decode"] = timed(bare) / len(frames)
     out["fuzz sweep ratio"] = out["fuzz sweep"] / COUNTS["fuzz sweep"] / out["imcpy bare decode"]
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "imc_conformance.cli", "fuzz", "--adapter", "imcpy", "--adapter", "pyimclsts",
-                    "--seed", "0", "--budget", "500"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    subprocess.run(command(["fuzz", "--adapter", "imcpy", "--adapter", "pyimclsts", "--seed", "0", "--budget",
+                            "500"]), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                    env=command_env(), cwd=tempfile.gettempdir(), check=False)
     out["fuzz differential"] = time.perf_counter() - start
     start = time.perf_counter()

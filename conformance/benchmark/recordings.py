@@ -9,7 +9,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .measure import CAPTURE_FRAMES, COUNTS, EDITION, command_env, median_of, whole
+from .measure import CAPTURE_FRAMES, COUNTS, EDITION, command, command_env, median_of, whole
 
 
 def capture_rows(suite, repeat: int) -> dict[str, float]:
@@ -51,7 +51,7 @@ def measured(argv: list[str]) -> tuple[float, float, int]:
     """(seconds, CPU seconds, peak resident memory in bytes) of one whole command (exit code 0 or 1 expected): the CPU
     time shows what contention with other work on the machine hides in the seconds."""
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", MEASURE, sys.executable, "-m", "imc_conformance.cli", *argv],
+    done = subprocess.run([sys.executable, "-c", MEASURE, *command(argv)],
                           capture_output=True, text=True, env=command_env(), cwd=tempfile.gettempdir())
     took = time.perf_counter() - start
     cpu, peak, code = done.stdout.split()

@@ -78,11 +78,11 @@ def adapter_choice(args, suite) -> tuple[str, list[str] | None]:
 def builtin_argv(name: str, suite, arguments: dict[str, str] | None = None) -> list[str] | None:
     """The command line of a built-in subprocess adapter (a shim, or a program built on first use, which may take
     ``--adapter-arg``s), or None for a library adapter."""
-    from ..native import BuildError
-
     builtin = suite.adapters.get(name)
     if builtin is None or builtin.argv is None:
         return None
+    from ..native import BuildError
+
     try:
         inspect.signature(builtin.argv).bind(**(arguments or {}))
     except TypeError:

@@ -4,11 +4,11 @@ errata, waivers), each once, no case twice."""
 
 from __future__ import annotations
 
+from .bounds import SHARDS_MAX
 from .causes import regrouped
 from .results import MessageResult, RunResult, message_verdict
 from .waivers import stale_note
 
-SHARDS_MAX = 10_000  # shards a selection may be split into (limits.py lists it with the other bounds)
 SAME = ("suite", "title", "edition", "implementation", "adapter", "strict")  # what the shards of one run share
 
 

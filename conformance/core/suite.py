@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import fnmatch
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Protocol
@@ -52,6 +53,25 @@ class BuiltinAdapter:
     extra: str | None = None  # the package's optional dependencies (pip extra) a library adapter needs
 
 
+class Kinds(Mapping):
+    """A suite's case kinds by name, each made (its package imported) when first wanted: a run of byte vectors never
+    imports the live kinds. ``makers``: name -> a function making the kind."""
+
+    def __init__(self, makers: dict[str, Callable[[], "CaseKind"]]):
+        self._makers, self._made = makers, {}
+
+    def __getitem__(self, name: str) -> "CaseKind":
+        if name not in self._made:
+            self._made[name] = self._makers[name]()
+        return self._made[name]
+
+    def __iter__(self):
+        return iter(self._makers)
+
+    def __len__(self) -> int:
+        return len(self._makers)
+
+
 class Suite(ABC):
     name: str  # the first segment of every case id
     title: str  # how reports name the suite
@@ -71,8 +91,8 @@ class Suite(ABC):
 
     @property
     @abstractmethod
-    def kinds(self) -> dict[str, CaseKind]:
-        """The case kinds, by name."""
+    def kinds(self) -> Mapping[str, CaseKind]:
+        """The case kinds, by name (``Kinds``: each made when first wanted)."""
 
     @property
     @abstractmethod

@@ -7,7 +7,7 @@ import sys
 from functools import cached_property, lru_cache
 from pathlib import Path
 
-from ...core.suite import BuiltinAdapter, Group
+from ...core.suite import BuiltinAdapter, Group, Kinds
 from ...paths import VECTORS
 from . import codec
 from .compare import Comparator
@@ -89,14 +89,23 @@ class ImcSuite(DataSuite):
         return tuple(Group(m.abbrev, str(m.id)) for m in self.defs.suite_messages)
 
     @cached_property
-    def kinds(self) -> dict:
-        from ...kinds.robustness import RobustnessKind  # the case kinds are imported when a run plans cases
-        from ...kinds.scenario import ScenarioKind
-        from ...kinds.vector import VectorKind
+    def kinds(self) -> Kinds:
+        return Kinds({"vector": self._vector_kind, "scenario": self._scenario_kind, "robustness": self._robustness_kind})
 
-        return {"vector": VectorKind(ImcCodec(self.defs, frozenset(r["id"] for r in self.rules))),
-                "scenario": ScenarioKind(self.wire, self.behaviour),
-                "robustness": RobustnessKind(self.wire, self.behaviour)}
+    def _vector_kind(self):
+        from ...kinds.vector import VectorKind  # each kind is imported when a run plans its cases
+
+        return VectorKind(ImcCodec(self.defs, frozenset(r["id"] for r in self.rules)))
+
+    def _scenario_kind(self):
+        from ...kinds.scenario import ScenarioKind
+
+        return ScenarioKind(self.wire, self.behaviour)
+
+    def _robustness_kind(self):
+        from ...kinds.robustness import RobustnessKind
+
+        return RobustnessKind(self.wire, self.behaviour)
 
     @cached_property
     def wire(self):

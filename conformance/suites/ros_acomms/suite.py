@@ -6,7 +6,7 @@ from __future__ import annotations
 from functools import cached_property
 from pathlib import Path
 
-from ...core.suite import BuiltinAdapter, Group
+from ...core.suite import BuiltinAdapter, Group, Kinds
 from ...paths import VECTORS
 from . import codec, forms
 from ...kinds.vector.texts import lossy_bytes
@@ -96,12 +96,18 @@ class RosSuite(DataSuite):
                      for t in self.defs.suite_types)
 
     @cached_property
-    def kinds(self) -> dict:
-        from ...kinds.scenario import ScenarioKind  # the case kinds are imported when a run plans cases
-        from ...kinds.vector import VectorKind
+    def kinds(self) -> Kinds:
+        return Kinds({"vector": self._vector_kind, "scenario": self._scenario_kind})
 
-        return {"vector": VectorKind(RosCodec(self.defs, frozenset(r["id"] for r in self.rules))),
-                "scenario": ScenarioKind(self.wire, self.behaviour)}
+    def _vector_kind(self):
+        from ...kinds.vector import VectorKind  # each kind is imported when a run plans its cases
+
+        return VectorKind(RosCodec(self.defs, frozenset(r["id"] for r in self.rules)))
+
+    def _scenario_kind(self):
+        from ...kinds.scenario import ScenarioKind
+
+        return ScenarioKind(self.wire, self.behaviour)
 
     @cached_property
     def wire(self):
