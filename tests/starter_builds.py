@@ -11,19 +11,20 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 from imc_conformance.cache import cache_dir
 from imc_conformance.native import adapter_sources, debian_packages, digest, locked, run
 
-LANGUAGES = ("java", "go", "rust", "c")
+LANGUAGES = ("python", "java", "go", "rust", "c")
 # The JVM's memory capped below the suite's data-memory limit (--memory-limit, 2048 MB by default): heap, code cache,
 # metaspace; one GC thread (adapters/README.md, "Memory limits").
 JVM = ["-Xmx256m", "-Xss1m", "-XX:+UseSerialGC", "-XX:ReservedCodeCacheSize=64m", "-XX:MaxMetaspaceSize=128m",
        "-XX:TieredStopAtLevel=1"]
 
 
-TOOLS = {"java": ("mvn", "java"), "go": ("go",), "rust": ("cargo",), "c": (os.environ.get("CC", "cc"),)}
+TOOLS = {"python": (sys.executable,), "java": ("mvn", "java"), "go": ("go",), "rust": ("cargo",), "c": (os.environ.get("CC", "cc"),)}
 
 
 class ToolchainMissing(Exception):
@@ -57,6 +58,10 @@ def built(language: str) -> list[str]:
     return (folder / "argv").read_text(encoding="utf-8").splitlines()
 
 
+def _python(work: Path, root: Path, final: Path) -> list[str]:
+    return [sys.executable, str(final / "adapter.py")]  # nothing to build: the standard library only
+
+
 def _java(work: Path, root: Path, final: Path) -> list[str]:
     run(["mvn", "-q", "-B", f"-Dmaven.repo.local={root / 'm2'}", "compile", "dependency:build-classpath",
          "-Dmdep.outputFile=classpath.txt"], "mvn compile (the Java starter)", cwd=work)
@@ -87,4 +92,4 @@ def _c(work: Path, root: Path, final: Path) -> list[str]:
     return [str(final / "starter")]
 
 
-BUILDERS = {"java": _java, "go": _go, "rust": _rust, "c": _c}
+BUILDERS = {"python": _python, "java": _java, "go": _go, "rust": _rust, "c": _c}

@@ -1,4 +1,5 @@
-"""The starters (adapters/starters: Java with Jackson, Go with encoding/json, Rust with serde_json, C with cJSON), built
+"""The starters (adapters/starters: Python with json, Java with Jackson, Go with encoding/json, Rust with serde_json, C
+with cJSON), built
 once into the cache (tests/starter_builds.py): their value helpers write and read back every float class at both
 widths to the bit (−0.0, NaN payloads, a signalling fp32 NaN, subnormals, fp32 digits) and hex; each passes
 adapter-check; a run through each is all UNSUPPORTED, without an adapter error."""
@@ -10,13 +11,14 @@ import os
 import shlex
 import struct
 import subprocess
+import sys
 
 import pytest
 
 from imc_conformance.cli import main
 from imc_conformance.kinds.vector.floats import FLOAT_CLASSES, float_from_bits, same_float
 
-from starter_builds import LANGUAGES, ToolchainMissing, built
+from starter_builds import LANGUAGES, ToolchainMissing, built, sources
 
 EXTRA_BITS = {4: ["7f800001", "ff800001", "3dcccccd", "40490fdb", "00000000"],  # signalling NaNs, 0.1, pi
               8: ["7ff0000000000001", "3fb999999999999a", "400921fb54442d18", "41d954fc40200000"]}
@@ -82,3 +84,33 @@ def test_a_run_through_a_starter_is_all_unsupported(starter, tmp_path, capsys):
     assert "nothing could be tested" in capsys.readouterr().err
     assert set(doc["summary"]) == {"UNSUPPORTED"} and doc["summary"]["UNSUPPORTED"] > 4000
     assert not doc["incidents"] and not doc["causes"]
+
+
+@pytest.mark.parametrize("language", LANGUAGES)
+def test_the_adapter_kit_copies_a_starter_and_the_contract_out_of_the_package(language, tmp_path, capsys):
+    from imc_conformance.paths import CONTRACT
+
+    kit = tmp_path / "kit"
+    assert main(["adapter-kit", language, str(kit)]) == 0
+    assert (kit / "ADAPTER-CONTRACT.md").read_bytes() == CONTRACT.read_bytes()
+    readme = (kit / "README.md").read_text(encoding="utf-8")
+    assert "](ADAPTER-CONTRACT.md)" in readme and "../../README.md" not in readme
+    assert sorted(p.relative_to(kit).as_posix() for p in kit.rglob("*") if p.is_file()) == sorted(
+        [*(p.relative_to(sources(language)).as_posix() for p in sources(language).rglob("*")
+           if p.is_file() and "__pycache__" not in p.parts), "ADAPTER-CONTRACT.md"])
+    capsys.readouterr()
+    assert main(["adapter-kit", language, str(kit)]) == 2  # never over what is there
+    assert "not empty" in capsys.readouterr().err
+
+
+def test_the_python_kit_passes_adapter_check_from_its_own_folder(tmp_path, capsys):
+    """What a newcomer with only the wheel does: the kit written, its starter checked where it was written."""
+    from imc_conformance.paths import CONTRACT
+
+    kit = tmp_path / "my-adapter"
+    assert main(["adapter-kit", "python", str(kit)]) == 0
+    capsys.readouterr()
+    assert main(["adapter-check", "--adapter-cmd", shlex.join([sys.executable, str(kit / "adapter.py")])]) == 0
+    out = capsys.readouterr().out
+    assert "implements nothing yet" in out and f"the adapter speaks the contract ({CONTRACT})" in out
+    assert CONTRACT.is_file()  # the installed contract, not a path of the checkout's

@@ -10,7 +10,7 @@ from ..suites import packages as suite_packages
 
 COMMANDS = {"run": "run", "list": "listing", "report": "report", "generate": "generate", "pcap": "pcap",
             "log": "log", "watch": "watch", "relay": "relay", "fuzz": "fuzz", "mutants": "mutants",
-            "matrix": "matrix", "adapter-check": "adapter_check"}  # command -> its module, in the order --help lists them
+            "matrix": "matrix", "adapter-check": "adapter_check", "adapter-kit": "adapter_kit"}  # command -> its module, in the order --help lists them
 
 
 def suite_commands() -> dict[str, object]:

@@ -1,5 +1,5 @@
-"""``imc-conformance adapter-check``: does an adapter speak the contract of adapters/README.md? A short, fixed set of
-requests (the hello, an unknown operation, requests in flight together, a batch, the suite's probes), each mistake
+"""``imc-conformance adapter-check``: does an adapter speak the adapter contract (adapters/README.md, installed with
+the package)? A short, fixed set of requests (the hello, an unknown operation, requests in flight together, a batch, the suite's probes), each mistake
 explained in plain words with its fix. Exit 0 only when there is none; what a newcomer runs first."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ SHOWN = 3  # examples shown of each kind of mistake
 
 
 def add(sub) -> None:
-    check = sub.add_parser("adapter-check", help="check that an adapter speaks the contract (adapters/README.md): "
-                                                 "each mistake explained with its fix")
+    check = sub.add_parser("adapter-check", help="check that an adapter speaks the adapter contract: each mistake "
+                                                 "explained with its fix")
     add_adapter(check, what="the adapter to check")
     add_suite(check)
     check.add_argument("--edition", help="the edition whose probes to send (default: the suite's first)")
@@ -23,7 +23,8 @@ def command(args) -> int:
     from ..escaping import printable
     from ..files import open_corpus
     from ..adaptercheck.check import check
-    from ..adaptercheck.mistakes import README, Mistake
+    from ..adaptercheck.mistakes import Mistake
+    from ..paths import CONTRACT
     from .adapters import adapter_choice, open_session
     from ..arguments import chosen_edition
 
@@ -61,9 +62,9 @@ def command(args) -> int:
         print(f"  fix:  {same[0].fix}")
     if kinds:
         print(f"{len(kinds)} kind{'s' if len(kinds) != 1 else ''} of mistake: the adapter does not speak the contract "
-              f"yet ({README})")
+              f"yet (the contract: {CONTRACT})")
         return 1
-    print(f"the adapter speaks the contract ({README}); next: imc-conformance run with the same options")
+    print(f"the adapter speaks the contract ({CONTRACT}); next: imc-conformance run with the same options")
     return 0
 
 

@@ -1,4 +1,4 @@
-//! A starter adapter for imc-conformance (adapters/README.md): the protocol loop, answering every request "unsupported"
+//! A starter adapter for imc-conformance (ADAPTER-CONTRACT.md): the protocol loop, answering every request "unsupported"
 //! until the TODOs call your implementation, and the decoded form's values done right (floats by their bits at the
 //! field's width: -0.0, NaN payloads, fp32 kept 32-bit; hex). With --values it reads value probes instead (what the
 //! suite's tests check the helpers with). Build: cargo build --release.
