@@ -12,6 +12,7 @@ from pathlib import Path
 from ..arguments import count, fuzz_count, megabytes, positive_seconds, timeout_seconds
 from ..errors import UsageError
 from .options import DEFAULT_MEMORY_MB, add_reports, add_suite, add_target
+from ..wording import counted
 
 DEFAULT_BUDGET = 100
 
@@ -135,7 +136,8 @@ def command(args) -> int:
         for session in sessions.values():
             session.close()
     judged = sum(tally.judged.values())
-    notes.append(f"{judged} examples judged, {len(tally.findings)} findings ({unexplained(tally)} unexplained)"
+    notes.append(f"{counted(judged, 'example')} judged, {counted(len(tally.findings), 'finding')} "
+                 f"({unexplained(tally)} unexplained)"
                  + (f"; stopped early: {tally.stopped}" if tally.stopped else ""))
     result = fuzz_result(suite, source, tally, names, [h["implementation"] for h in hellos], edition, started=started,
                          duration=time.monotonic() - began, notes=notes)

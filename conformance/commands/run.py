@@ -12,6 +12,7 @@ from pathlib import Path
 from ..errors import UsageError
 from ..escaping import printable
 from .options import add_adapter, add_reports, add_selection, add_target
+from ..wording import counted
 
 
 def add(sub) -> None:
@@ -175,7 +176,7 @@ def command(args) -> int:
         else:
             doc = waivers_document([c.id for c in result.cases if failing(c.verdict, strict=False)], reason)
         problems += write_file(Path(args.write_waivers), json.dumps(doc, indent=1) + "\n",
-                               f"waivers file ({len(doc['waivers'])} waivers)", console)
+                               f"waivers file ({counted(len(doc['waivers']), 'waiver')})", console)
     if not result.complete and not result.stopped:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()

@@ -19,6 +19,7 @@ import orjson
 
 from ..core.suite import Suite
 from ..inputs import parse_json, read_bytes
+from ..wording import counted
 
 MANIFEST = "manifest.json"
 ALTERED: set[Path] = set()  # packaged folders a file was read from that is not as built (checked, then used)
@@ -234,5 +235,5 @@ def write_generated(suite: DataSuite, files: dict[str, str], check: bool, label:
         (root / name).write_text(files[name], encoding="utf-8")
     case_files = [t for n, t in files.items() if n.startswith("cases/")]
     total = sum(len(json.loads(t)["cases"]) for t in case_files)
-    print(f"{total} cases in {len(case_files)} files; {len(drift)} written, {len(stale)} removed")
+    print(f"{counted(total, 'case')} in {counted(len(case_files), 'file')}; {len(drift)} written, {len(stale)} removed")
     return 0

@@ -163,8 +163,8 @@ def schemas() -> str:
     for path in sorted((VECTORS / "schema").glob("*.schema.json")):
         doc = json.loads(path.read_text(encoding="utf-8"))
         out += [f"## `{path.name}`", "", f"**{_escape(doc.get('title', ''))}**. {_escape(doc.get('description', ''))}", "",
-                '??? note "The schema"', "", "    ```json",
-                *("    " + line for line in path.read_text(encoding="utf-8").rstrip("\n").split("\n")), "    ```", ""]
+                '<details markdown="1"><summary>The schema</summary>', "", "```json",
+                *path.read_text(encoding="utf-8").rstrip("\n").split("\n"), "```", "", "</details>", ""]
     return "\n".join(out)
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 from ...core.cases import expectation
 from ..scenario.kind import LiveKind
 from .phase import Frame, Phase, ProbeProgram
+from ...wording import counted
 
 
 class RobustnessKind(LiveKind):
@@ -69,7 +70,8 @@ class RobustnessKind(LiveKind):
                 out.append(Frame(case.id, encoding, expect, data))
         skipped = []
         if too_large:
-            skipped.append(f"{len(too_large)} frames over {limit} bytes (one datagram's limit): {', '.join(too_large[:4])}"
+            skipped.append(f"{counted(len(too_large), 'frame')} over {limit} bytes (one datagram's limit): "
+                           f"{', '.join(too_large[:4])}"
                            + (" ..." if len(too_large) > 4 else ""))
         for why, ids in barred.items():
             skipped.append(f"{len(ids)} accepted frames of {', '.join(sorted({i.split('/')[1] for i in ids}))} ({why})")

@@ -24,6 +24,7 @@ from ..scenario.wire import Addressing, Composed, Parsed
 from .hostile import Hostile
 from .probing import Probing
 from .script import FLOOD_ENTITY, Frame, Probe, Restart, Send, Wait
+from ...wording import counted
 
 
 @dataclass
@@ -192,8 +193,8 @@ class PhaseMachine(Probing, Hostile):
 
     def _run(self):
         settings, phase = self.phase.settings, self.phase
-        self._log("phase", f"{len(phase.frames)} corpus frames in blocks of {settings['block']}, then "
-                           f"{settings['garbage']} garbage datagrams; {len(self.probes)} probes"
+        self._log("phase", f"{counted(len(phase.frames), 'corpus frame')} in blocks of {settings['block']}, then "
+                           f"{counted(settings['garbage'], 'garbage datagram')}; {counted(len(self.probes), 'probe')}"
                   + "".join(f"; skipped {why}" for why in phase.skipped))
         unanswered = yield from self._round(self.probes, "baseline")
         for probe in self.probes:

@@ -20,6 +20,7 @@ def command(args) -> int:
     from ...errors import UsageError
     from . import load
     from .package_files import write_package
+    from ...wording import counted
 
     suite = load()
     edition = chosen_edition(suite, args.edition)
@@ -27,6 +28,6 @@ def command(args) -> int:
         written, left_out = write_package(suite.defs.edition(edition), args.folder, args.replace)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    print(f"wrote {len(written)} files under {args.folder}" +
+    print(f"wrote {counted(len(written), 'file')} under {args.folder}" +
           (f"; left out of edition {edition}: {', '.join(left_out)}" if left_out else ""))
     return 0

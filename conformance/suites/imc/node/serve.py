@@ -9,6 +9,7 @@ import time
 
 from ....arguments import chosen_edition, listen_port, probability
 from .breaks import BREAKS, VARIANTS
+from ....wording import counted
 
 
 def add_command(sub) -> None:
@@ -101,8 +102,9 @@ def command_serve(args) -> int:
     try:
         serve_forever(sock, node)
     except KeyboardInterrupt:
-        print(f"stopped; dropped {node.dropped} malformed datagrams and {node.unjudged} nested deeper than the "
-              f"reference codec follows; ignored {node.refused} announced services (names, or the contact table full)",
+        print(f"stopped; dropped {counted(node.dropped, 'malformed datagram')} and {node.unjudged} nested deeper than "
+              f"the reference codec follows; ignored {counted(node.refused, 'announced service')} (names, or the "
+              "contact table full)",
               file=sys.stderr)
         return 0
     finally:
