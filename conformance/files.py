@@ -1,17 +1,12 @@
-"""Reading the files a run depends on: a suite's case files, waivers, saved results.
-
-Every file is checked against its JSON Schema, and case files also against the suite's definitions, when
-it is read; a problem is reported with the file and the JSON path of the first one found
-(``200-LblRange.json: $.cases[0].message.fields.range: ...``). The schema check of a case file is
-remembered per file content in the cache folder, since over a whole corpus it takes seconds.
+"""Opening what a run depends on: a suite and its corpus (read by ``suites/corpus.py``, the one room that reads case
+files), waivers and saved results, each checked against its JSON Schema when read; a problem is reported with the file
+and the JSON path of the first one found.
 """
 
 from __future__ import annotations
 
 import datetime as dt
 import hashlib
-import os
-from functools import cache
 from pathlib import Path
 
 from . import inputs
@@ -24,7 +19,7 @@ from .core.waivers import WaiverError, Waivers, waivers_in_force
 from .paths import VECTORS
 from .schemas import schema_error
 from .suites import load_suite
-from .suites.data_suite import manifest, not_as_built, read_document
+from .suites.corpus import read_corpus
 
 
 def read_json(path: Path, error=ValueError, unique: bool = False):
@@ -36,7 +31,7 @@ def read_json(path: Path, error=ValueError, unique: bool = False):
         raise error(str(exc)) from None
 
 
-# ---------------------------------------------------------------- case files
+# ---------------------------------------------------------------- a suite and its corpus
 
 def open_suite(suite_name: str, directory: Path | None = None) -> Suite:
     """The suite over its packaged data, or over ``directory`` given as a suite folder (holding ``cases/`` and maybe
@@ -58,16 +53,9 @@ def open_suite(suite_name: str, directory: Path | None = None) -> Suite:
 
 def open_corpus(suite_name: str, directory: Path | None = None,
                 groups: frozenset[str] | None = None) -> tuple[Suite, list[Case]]:
-    """The suite (``open_suite``) and its cases. ``groups``: only the cases of these groups are wanted; the packaged
-    corpus then reads only their files (its manifest says which file holds which group), a folder given instead is
-    read whole."""
+    """The suite (``open_suite``) and its cases (``suites.corpus.read_corpus``: ``groups``, the groups wanted)."""
     suite = open_suite(suite_name, directory)
-    if directory is None:
-        return suite, read_cases(suite, tuple(suite.case_folders.items()), groups=groups)
-    folder = Path(directory)
-    if suite.folder == folder:
-        return suite, read_cases(suite, tuple(suite.case_folders.items()))
-    return suite, read_cases(suite, ((folder.name, next(iter(suite.case_folders.values()))),), bare=folder)
+    return suite, read_corpus(suite, directory, groups)
 
 
 def corpus_digest(suite: Suite, directory: Path | None = None) -> str:
@@ -76,72 +64,6 @@ def corpus_digest(suite: Suite, directory: Path | None = None) -> str:
     folder = Path(directory) if directory is not None else suite.folder
     own = folder == suite.folder
     return suite.corpus_digest([suite.folder / sub for sub in suite.case_folders] if own else [folder])
-
-
-@cache
-def read_cases(suite: Suite, folders: tuple[tuple[str, str], ...], bare: Path | None = None,
-               groups: frozenset[str] | None = None) -> list[Case]:
-    """Every case of the suite's case folders (sub-folder name, kind), each file checked unless the packaged
-    manifest vouches for its bytes; ids unique; a file the manifest lists is there. ``groups``: skip the packaged
-    files the manifest files elsewhere."""
-    listed = manifest(suite.packaged) if bare is None and suite.folder == suite.packaged else {}
-    cases, seen, found = [], set(), False
-    for sub, kind in folders:
-        folder = bare or suite.folder / sub
-        missing = sorted(name for name, entry in listed.items() if name.startswith(f"{sub}/") and (
-            groups is None or entry.get("group") in groups) and not (suite.folder / name).is_file())
-        if missing:  # a message left out would pass unseen
-            raise not_as_built(suite.packaged, f"{missing[0]} is listed in its manifest but missing")
-        for path in json_files(folder):
-            found = True
-            entry = listed.get(f"{sub}/{path.name}")
-            if groups is not None and entry is not None and entry.get("group") not in groups:
-                continue
-            for case in read_case_file(suite, kind, path):
-                if case.id in seen:
-                    raise CorpusError(f"{path}: the case id {case.id} appears twice in the corpus")
-                seen.add(case.id)
-                cases.append(case)
-    if not found:
-        raise CorpusError(f"{bare or suite.folder}: no case files (*.json)")
-    return cases
-
-
-def json_files(folder: Path) -> list[Path]:
-    """The ``*.json`` files of ``folder`` by name (listed by name: a path glob costs a run of one message more than
-    reading its file)."""
-    try:
-        names = os.listdir(folder)
-    except OSError:
-        return []
-    return [folder / name for name in sorted(names) if name.endswith(".json") and not name.startswith(".")]
-
-
-def read_case_file(suite: Suite, kind: str, path: Path) -> list[Case]:
-    """The cases of one file: a packaged file as the generator recorded it is taken as it is; any other is read
-    bounded and checked (schema, then every case against the definitions)."""
-    raw, doc, vouched = read_document(path, suite.packaged)
-    if vouched:
-        group = suite.group_of(doc)
-        return [Case(data["id"], group, kind, data) for data in doc["cases"]]
-    problem = schema_error(suite.schema(kind), doc, str(path), memo=raw)
-    if problem:
-        raise CorpusError(problem)
-    group = suite.group_of(doc)
-    if group not in {g.name for g in suite.groups}:
-        raise CorpusError(f"{path}: the file is filed under {group!r}, which is not a {suite.group_label} "
-                          f"of the suite {suite.name!r}")
-    prefix = f"{suite.name}/{group}/"
-    out = []
-    for i, data in enumerate(doc["cases"]):
-        if not data["id"].startswith(prefix):
-            raise CorpusError(f"{path}: $.cases[{i}].id: {data['id']!r} is not under {prefix} (the file's "
-                              f"{suite.group_label})")
-        problem = suite.case_problem(kind, data)
-        if problem:
-            raise CorpusError(f"{path}: $.cases[{i}]{problem[0]}: {problem[1]}")
-        out.append(Case(data["id"], group, kind, data))
-    return out
 
 
 # ---------------------------------------------------------------- waivers and saved results

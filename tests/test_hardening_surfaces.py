@@ -199,7 +199,7 @@ def test_5_a_case_file_missing_from_the_cached_folder_is_never_a_message_left_ou
 
 def test_5_a_file_its_manifest_lists_is_there_when_read(tmp_path):
     """Item 5, when the file goes after the folder was found whole: the reader refuses, naming it, in one line."""
-    from imc_conformance.files import read_cases
+    from imc_conformance.suites.corpus import read_cases
     from imc_conformance.suites.imc.suite import ImcSuite, load_whole
 
     suite = load_whole(built_copy(tmp_path))

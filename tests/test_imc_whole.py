@@ -23,7 +23,7 @@ from imc_conformance.files import open_corpus, schema_error
 from imc_conformance.paths import VECTORS
 from imc_conformance.sessions.library import LibrarySession
 from imc_conformance.suites import load_suite
-from imc_conformance.suites.data_suite import trusted
+from imc_conformance.suites.corpus import trusted
 from imc_conformance.suites.imc import codec
 from imc_conformance.suites.imc.corpus import samples
 from imc_conformance.suites.imc.paths import IMC
@@ -89,12 +89,12 @@ def test_every_generated_file_passes_its_schema_and_every_case_its_definitions(f
 
 
 def test_a_selection_reads_only_its_files_and_the_manifest_vouches_only_for_them_as_built(full, monkeypatch):
-    from imc_conformance import files
+    from imc_conformance.suites import corpus
 
     read = []
-    real = files.read_case_file
-    monkeypatch.setattr(files, "read_case_file", lambda suite, kind, path: read.append(path.name) or real(suite, kind, path))
-    files.read_cases.cache_clear()
+    real = corpus.read_case_file
+    monkeypatch.setattr(corpus, "read_case_file", lambda suite, kind, path: read.append(path.name) or real(suite, kind, path))
+    corpus.read_cases.cache_clear()
     cases = open_corpus("imc-full", groups=frozenset({"EstimatedState"}))[1]
     assert {c.group for c in cases} == {"EstimatedState"} and read == ["350-EstimatedState.json"]
     path = full.folder / "cases" / "350-EstimatedState.json"

@@ -12,7 +12,8 @@ import sys
 import pytest
 
 from imc_conformance.errors import CorpusError
-from imc_conformance.files import open_corpus, read_case_file
+from imc_conformance.files import open_corpus
+from imc_conformance.suites.corpus import read_case_file
 from imc_conformance.suites import load_suite
 from imc_conformance.suites.data_suite import MANIFEST, manifest_text
 

@@ -1,90 +1,18 @@
-"""What the suites share: definitions, rules and errata as JSON files of a data folder, and writing (or checking)
-the files a generator builds.
-
-The packaged files were checked when they were built (and by the tests), and ``manifest.json`` holds the SHA-256
-of each as built: a packaged file whose bytes are those is trusted as it is, without a check at every run. Any
-other file (a packaged one changed since, or one of a folder given instead with ``--vectors``: a user's) is read
-bounded and checked against its schema, and a problem is a corpus error naming the file and the JSON path. A folder
-the suite builds for itself in the cache (the whole protocol's) has a sealed manifest: there a file not as built is
-never used, and the folder is damaged (a corpus error, and built again the next time)."""
+"""What the suites share: definitions, rules and errata as JSON files of a data folder (read as ``corpus.py`` reads
+every file of a corpus: trusted as built by the packaged manifest, or checked against its schema), and writing (or
+checking) the files a generator builds, with their manifest."""
 
 from __future__ import annotations
 
 import hashlib
 import json
-from functools import cache, cached_property
+from functools import cached_property
 from pathlib import Path
 
-import orjson
-
 from ..core.suite import Suite
-from ..inputs import parse_json, read_bytes
+from ..inputs import read_bytes
 from ..wording import counted
-
-MANIFEST = "manifest.json"
-ALTERED: set[Path] = set()  # packaged folders a file was read from that is not as built (checked, then used)
-
-
-@cache
-def manifest_of(packaged: Path) -> tuple[dict[str, dict], bool]:
-    """The packaged folder's manifest: file (relative path) -> {"sha256", and for case files "group", "kind"}, and
-    whether it is sealed (a folder the suite built for itself: a file not as built makes it damaged); empty (every
-    file checked) where there is none or it cannot be read."""
-    try:
-        doc = orjson.loads(read_bytes(packaged / MANIFEST))
-        files, sealed = doc["files"], doc.get("sealed") is True
-    except (ValueError, LookupError, TypeError):  # missing, unreadable, not JSON, not a manifest
-        return {}, False
-    if not isinstance(files, dict):
-        return {}, False
-    return {name: entry for name, entry in files.items() if isinstance(entry, dict)}, sealed
-
-
-def manifest(packaged: Path) -> dict[str, dict]:
-    """The files of the packaged folder's manifest (``manifest_of``)."""
-    return manifest_of(packaged)[0]
-
-
-def trusted(path: Path, raw: bytes, packaged: Path) -> bool:
-    """Whether ``raw`` are the bytes of a packaged file as the generator recorded them."""
-    if not path.is_relative_to(packaged):
-        return False
-    entry = manifest(packaged).get(path.relative_to(packaged).as_posix())
-    return isinstance(entry, dict) and entry.get("sha256") == hashlib.sha256(raw).hexdigest()
-
-
-def not_as_built(packaged: Path, what: str):
-    """The CorpusError for a file of the packaged folder that is not as its manifest says (``what``). A sealed folder
-    is then damaged: its manifest is removed, so that it is rebuilt the next time it is wanted, and nothing in it is
-    used; a folder shipped or generated in a checkout is to be generated again."""
-    from ..errors import CorpusError
-
-    if not manifest_of(packaged)[1]:
-        return CorpusError(f"{packaged}: {what} (run imc-conformance generate, or install again)")
-    try:
-        (packaged / MANIFEST).unlink()
-    except OSError:
-        pass
-    return CorpusError(f"{packaged}: damaged, {what}: nothing in it is used, and it is built again at the next run")
-
-
-def read_document(path: Path, packaged: Path) -> tuple[bytes, object, bool]:
-    """A data or case file's bytes (read bounded), its JSON value, and whether the packaged manifest vouches for it
-    (then it needs no check); CorpusError for a file that cannot be read or is not JSON, and for a file of a sealed
-    folder that is not as built."""
-    from ..errors import CorpusError
-
-    try:
-        raw = read_bytes(path)
-        if trusted(path, raw, packaged):
-            return raw, orjson.loads(raw), True
-        if path.is_relative_to(packaged):
-            if manifest_of(packaged)[1]:
-                raise not_as_built(packaged, f"{path.relative_to(packaged)} is not as built")
-            ALTERED.add(packaged)
-        return raw, parse_json(raw, str(path)), False
-    except ValueError as exc:
-        raise CorpusError(str(exc)) from None
+from .corpus import ALTERED, MANIFEST, read_document
 
 
 def read_data_file(path: Path, schema: str | None, packaged: Path):
