@@ -153,8 +153,8 @@ def command(args) -> int:
             added = promote.merge(args.promote, suite.name, records)
         except (OSError, ValueError) as exc:
             raise UsageError(f"cannot promote into {args.promote}: {exc}") from exc
-        console.print(f"promoted {added} new findings into {args.promote} ({len(records) - added} were there already); "
-                      "imc-conformance generate makes them vectors", highlight=False, markup=False)
+        console.print(f"promoted {counted(added, 'new finding')} into {args.promote} ({len(records) - added} were there "
+                      "already); imc-conformance generate makes them vectors", highlight=False, markup=False)
     if tally.stopped == "interrupted":
         return 130
     say_untested(result)
