@@ -12,6 +12,7 @@ lost is INCONCLUSIVE: its reply may be among them.
 
 from __future__ import annotations
 
+import bisect
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -104,6 +105,11 @@ class PassiveExchanges:
         return any(_matches(w.fields, rule.reply_when) and (id(rule), w.dst, w.src) in self.pairs
                    for rule in self.by_reply.get(w.message, ()))
 
+    def due(self, now: float) -> list[Finding]:
+        """Judge every exchange whose bound has passed by ``now``: a clock that runs on frames no exchange watches
+        (a log's other traffic) decides what is due before anything later can split it."""
+        return self._expire(now) if now > self.next_deadline else []
+
     def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> None:
         """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
         a log's clock jumped, a relay dropped a datagram): a request left unanswered across that time is not judged
@@ -143,7 +149,7 @@ class PassiveExchanges:
             elif not o.answered:
                 out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
                                          f"the capture ends {end - o.request.time:.3f} s after the request, before "
-                                         f"its bound of {o.deadline - o.request.time:g} s", o.request))
+                                         f"its bound of {o.rule.within:g} s", o.request))
         return out
 
     # ------------------------------------------------------------ requests
@@ -154,10 +160,14 @@ class PassiveExchanges:
         if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
                for o in same_key):
             return  # a resend of an open request is the same exchange
-        o = _Open(rule, w, key, w.time + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
+        o = _Open(rule, w, key, _latest(w) + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
         self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
-        self.open[id(rule)].append(o)
+        queue = self.open[id(rule)]
+        if queue and queue[-1].deadline > o.deadline:  # a request timed by a bracket may end before an earlier one
+            queue.insert(bisect.bisect_right(queue, o.deadline, key=_deadline), o)
+        else:
+            queue.append(o)
         self.next_deadline = min(self.next_deadline, o.deadline)
 
     # ------------------------------------------------------------ replies
@@ -183,9 +193,11 @@ class PassiveExchanges:
                 out.append(self._finding(o, "to-requester", Verdict.PASS if ok else LEVELS[c["level"]], c["clause"],
                                          "" if ok else f"{w.message} sent to system {show(w.dst)}, not to the "
                                                        f"requester {show(o.request.src)}", w))
-        if not o.answered:  # within the bound: a request is judged unanswered once its bound has passed
+        if not o.answered:  # not past the bound: a request is judged unanswered once its bound has surely passed
             o.answered = True
-            out.append(self._finding(o, "answered", Verdict.PASS, ex["clause"], "", w))
+            late = self._late(o, w)
+            out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE if late else Verdict.PASS, ex["clause"],
+                                     late and f"{ex['reply']} {late}", w))
         if o.states is not None:
             out += self._state(o, w)
         return out
@@ -206,7 +218,9 @@ class PassiveExchanges:
         kind = states.kind(value)
         if kind == "terminal" or kind == "open" or (kind == "unknown" and states.unknown is not None):
             o.terminal, o.open_end = w, (None if kind == "terminal" else states.open.get(hashable(value), states.unknown))
-            out.append(self._finding(o, "terminal", Verdict.PASS, states.clause, "", w))
+            late = self._late(o, w)
+            out.append(self._finding(o, "terminal", Verdict.INCONCLUSIVE if late else Verdict.PASS, states.clause,
+                                     late and f"terminal {self._said(w, states.field)} {late}", w))
         return out
 
     def _states(self, rule: _Rule, fields: dict) -> States:
@@ -255,7 +269,7 @@ class PassiveExchanges:
                 o = queue.popleft()
                 out += self._judge_expired(o)
             ended = self.ended[rid]
-            while ended and now - ended[0].deadline > ended[0].deadline - ended[0].request.time:
+            while ended and now - ended[0].deadline > ended[0].rule.within:
                 gone = ended.popleft()
                 self.keyed[(rid, gone.key)].remove(gone)
         self.next_deadline = min((q[0].deadline for q in self.open.values() if q), default=float("inf"))
@@ -272,7 +286,7 @@ class PassiveExchanges:
         return findings
 
     def _expired(self, o: _Open) -> list[Finding]:
-        ex, bound = o.rule.exchange, o.deadline - o.request.time
+        ex, bound = o.rule.exchange, o.rule.within
         if not o.answered:
             self.keyed[(id(o.rule), o.key)].remove(o)
             if o.orphans and o.rule.echoes:
@@ -331,6 +345,16 @@ class PassiveExchanges:
                              o.rule.exchange["clause"],
                              f"{what} ({'register entry' if should else 'open reading'} {ambiguity})", o.request)
 
+    def _late(self, o: _Open, w: Watched) -> str:
+        """Why ``w``, which came before the request's bound surely passed, may yet have come after it (its time and
+        the request's known only within brackets: frames of a log stamped by other clocks); "" if surely within."""
+        within = o.rule.within
+        if _latest(w) - o.request.time <= within:
+            return ""
+        early, late = max(0.0, w.time - _latest(o.request)), _latest(w) - o.request.time
+        return (f"came {early:.3f} to {late:.3f} s after the request (bound {within:g} s): the log's clocks tell no "
+                "closer, not judged")
+
     # ------------------------------------------------------------ shared
 
     def _finding(self, o: _Open, aspect: str, verdict: Verdict, clause: str, detail: str, w: Watched) -> Finding:
@@ -361,6 +385,15 @@ class PassiveExchanges:
                      values(ex["reply"], ex.get("reply_when", {})),
                      [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex,
                      seconds(ex["within"], self.bounds) * scale)
+
+
+def _deadline(o: _Open) -> float:
+    return o.deadline
+
+
+def _latest(w: Watched) -> float:
+    """The latest time ``w`` can have been seen at."""
+    return w.time if w.latest is None else w.latest
 
 
 def _matches(fields: dict, when: dict[str, frozenset]) -> bool:

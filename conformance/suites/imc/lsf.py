@@ -22,8 +22,8 @@ from . import codec
 from .crc16 import arc
 
 SYNCS = (b"\x54\xfe", b"\xfe\x54")
-HEAD = {b"\x54\xfe": struct.Struct("<HHHd"), b"\xfe\x54": struct.Struct(">HHHd")}  # sync, mgid, size, timestamp
-LOOK = HEAD[SYNCS[0]].size  # bytes a frame's place needs before its size and time can be read
+HEAD = {b"\x54\xfe": struct.Struct("<HHHdH"), b"\xfe\x54": struct.Struct(">HHHdH")}  # sync, mgid, size, timestamp, src
+LOOK = HEAD[SYNCS[0]].size  # bytes a frame's place needs before its size, time and sender can be read
 OVERHEAD = codec.HEADER_SIZE + codec.FOOTER_SIZE
 FRAME, MORE, CUT, NONE = "frame", "more", "cut", "none"  # what a place in a log holds (LsfReader._at)
 
@@ -64,17 +64,18 @@ class LsfReader:
                 order = buf[pos:pos + 2]
                 head = HEAD.get(order)
                 if head is not None and n - pos >= LOOK:  # the common case: a frame of a message IMC.xml defines
-                    _, _, size, t = head.unpack_from(buf, pos)
+                    _, _, size, t, src = head.unpack_from(buf, pos)
                     end = pos + OVERHEAD + size
                     if end <= n and buf[pos + 2:pos + 4] in ids[order]:
                         number += 1
-                        yield Logged(number, t, base + pos, buf[pos:end])
+                        yield Logged(number, t, base + pos, buf[pos:end], system=src)
                         pos = end
                         continue
                 what, end, t = self._at(buf, pos, n, last)
                 if what is FRAME:
                     number += 1
-                    yield Logged(number, t, base + pos, buf[pos:end])
+                    yield Logged(number, t, base + pos, buf[pos:end], system=HEAD[buf[pos:pos + 2]].unpack_from(
+                        buf, pos)[4])
                     pos = end
                 elif what is NONE:
                     found = self._next_frame(buf, pos, n, last)
@@ -101,7 +102,7 @@ class LsfReader:
             return NONE, 0, 0.0
         if n - pos < LOOK:
             return CUT, 0, 0.0
-        _, _, size, t = head.unpack_from(buf, pos)
+        _, _, size, t, _ = head.unpack_from(buf, pos)
         end = pos + OVERHEAD + size
         known = buf[pos + 2:pos + 4] in self.ids[order]
         if end > n:
