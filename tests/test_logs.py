@@ -639,3 +639,97 @@ def test_a_request_stamped_in_the_past_is_timed_by_its_place_not_its_stamp(log, 
     doc = report(tmp_path / "r.json")
     assert code == 0 and doc["verdicts"][QUERY_ANSWERED] == "PASS"
     assert not any("clock jumped" in n for n in doc["notes"]), doc["notes"]
+
+
+# ---------------------------------------------------------------- each system on its own clock
+
+PEER = 31
+SYSTEMS_ANSWERED = QUERY_ANSWERED
+IRIDIUM_ANSWERED = "imc/IridiumMsgTx/capture/exchange/iridium-transmission/answered"
+
+
+def frame(message: str, t: float, src: int, dst: int, fields: dict | None = None) -> bytes:
+    return codec.encode(SUITE.defs, {"abbrev": message, "fields": fields or {}, "header": {
+        "timestamp": t, "src": src, "src_ent": 255, "dst": dst, "dst_ent": 255}}, "le")
+
+
+def test_a_log_of_three_systems_on_skewed_clocks_is_judged_as_on_one_clock(tmp_path, capsys):
+    """The vehicle's log of its own frames, a station's (its clock 42 s late) and a peer's (12 s early), in the order
+    they came: every exchange judged as in the same log on one clock, none INCONCLUSIVE, the log never split (it
+    split at every frame of another system, and its exchanges were INCONCLUSIVE)."""
+    counts = []
+    for name, clocks in (("one", {PEER: 0.0}), ("skewed", {STATION: -42.0, PEER: 12.0})):
+        write_log(tmp_path / f"{name}.lsf", SUITE.defs, SUITE.wire, EDITION, 3000, clocks=clocks)
+        code, out = run(tmp_path / f"{name}.lsf", "--json", tmp_path / f"{name}.json", capsys=capsys)
+        doc = report(tmp_path / f"{name}.json")
+        assert code == 0 and set(doc["verdicts"].values()) == {"PASS"}, out.out
+        assert not any("clock jumped" in n for n in doc["notes"])
+        counts.append({i: c for i, c in doc["counts"].items() if "/exchange/" in i})
+    assert counts[0] == counts[1] and len(counts[1]) == 11
+    assert counts[1][SYSTEMS_ANSWERED]["PASS"].startswith("113 exchanges")
+    clocks = next(n for n in doc["notes"] if n.startswith("the log is timed by the clock of system 30"))
+    assert "19696 (509 frames, stamped 41.9 to 41.9 s behind); 31 (226 frames, stamped 12.1 to 12.1 s ahead)" in clocks
+
+
+@pytest.mark.parametrize("after", ["another system's frame stamped 12 s behind", "the vehicle's clock set back"])
+def test_a_missed_reply_fails_whatever_frames_come_after(log, tmp_path, capsys, after):
+    """A query left unanswered for 54 s of the vehicle's running clock FAILs, whatever comes later: a frame of
+    another system stamped 12 s behind (it split the log: INCONCLUSIVE), or the vehicle's clock set back an hour (a
+    split, across which only the query still open is INCONCLUSIVE; what was due was judged before)."""
+    end = last_time(log)
+    tail = query(end + 1) + heartbeats(end + 2, 54)
+    if after == "another system's frame stamped 12 s behind":
+        tail += frame("Heartbeat", end + 56 - 12, PEER, 0xFFFF) + heartbeats(end + 56, 3)
+    else:  # an Iridium message sent at 3 s has 60 s: open across the split
+        iridium = frame("IridiumMsgTx", end + 3, STATION, VEHICLE, {"req_id": 999, "ttl": 600, "destination": "",
+                                                                    "data": "cafe"})
+        tail = tail[:len(query(0))] + iridium + tail[len(query(0)):] + heartbeats(end - 3600, 10)
+    (tmp_path / "Data.lsf").write_bytes(log + tail)
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    doc = report(tmp_path / "r.json")
+    assert code == 1 and doc["counts"][QUERY_ANSWERED] == {"FAIL": "1 exchange"}
+    if after == "the vehicle's clock set back":
+        assert doc["counts"][IRIDIUM_ANSWERED] == {"INCONCLUSIVE": "1 exchange",
+                                                   "PASS": doc["counts"][IRIDIUM_ANSWERED]["PASS"]}
+    assert "no AcousticSystems from system 30 to 19696 within 5 s" in " ".join(doc["details"][QUERY_ANSWERED])
+
+
+def judged_exchange(frames: list[tuple[float, bytes]]) -> str:
+    """The verdict of the acoustic-systems exchange in a log of these frames (true time, bytes), in the order they
+    came."""
+    reader = SUITE.log_reader()
+    judge = CaptureJudge("imc", reader.rules, reader.edition, Selection(), log=True)
+    data = b"".join(f for _, f in sorted(frames, key=lambda tf: tf[0]))
+    for unit in reader.units(iter([data]), [], "x"):
+        judge.logged(unit)
+    result = judge.result(implementation="x", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False,
+                          title="IMC")
+    return {c.id: c.verdict.name for m in result.messages for c in m.cases}.get(QUERY_ANSWERED, "none")
+
+
+@settings(max_examples=60, deadline=None)
+@given(skew=st.floats(-100, 100), delay=st.one_of(st.none(), st.floats(0, 12)), own_asks=st.booleans(),
+       period=st.sampled_from([0.05, 0.3, 1.0]))
+def test_a_verdict_holds_whatever_the_offset_between_the_clocks(skew, delay, own_asks, period):
+    """The vehicle logs its heartbeats every ``period`` s for 40 s; at 5 s a query passes between it and a peer whose
+    clock is ``skew`` s off, and the reply comes ``delay`` s later (None: never). A late reply never PASSes, one
+    within the bound never FAILs, a missed one always FAILs; and the verdict is decided outside the bracket's width
+    (the period, and the 1 s a frame may be logged after its stamp)."""
+    start = 1.7e9
+    asker, answerer = (VEHICLE, PEER) if own_asks else (PEER, VEHICLE)
+    stamp = {VEHICLE: 0.0, PEER: skew}
+    frames = [(i * period, frame("Heartbeat", start + i * period, VEHICLE, 0xFFFF)) for i in range(int(40 / period))]
+    frames.append((5.0001, frame("AcousticSystemsQuery", start + 5.0001 + stamp[asker], asker, answerer)))
+    if delay is not None:
+        frames.append((5.0001 + delay, frame("AcousticSystems", start + 5.0001 + delay + stamp[answerer], answerer,
+                                             asker, {"list": "b1"})))
+    verdict = judged_exchange(frames)
+    if delay is None:
+        assert verdict == "FAIL"
+        return
+    assert verdict != "PASS" or delay <= 5, (verdict, delay)
+    assert verdict != "FAIL" or delay > 5, (verdict, delay)
+    if delay < 5 - period - 1.001:
+        assert verdict == "PASS"
+    if delay > 5 + period + 1.001:
+        assert verdict == "FAIL"
