@@ -439,6 +439,22 @@ def test_a_gzip_member_cut_in_the_middle_of_a_log(log, tmp_path, capsys):
     assert doc["read"].startswith(f"{before + after:,} frames read") and "FAIL" not in set(doc["verdicts"].values())
 
 
+def test_a_gzip_member_cut_and_the_rest_of_the_frame_it_split_are_one_line(log, tmp_path, capsys):
+    """Members that end anywhere (a logger that flushes in the middle of a frame): the member cut held the start of a
+    frame whose rest begins the next one. The cut and that rest are one damage, one line (the rest was a second
+    line: a stretch of bytes that are no IMC frame), and every whole frame after it is judged."""
+    size = 5000
+    parts = [gzip.compress(log[a:a + size]) for a in range(0, len(log), size)]
+    k = len(parts) // 2
+    cut = parts[k][:len(parts[k]) // 2]
+    (tmp_path / "Data.lsf.gz").write_bytes(b"".join(parts[:k]) + cut + b"".join(parts[k + 1:]))
+    code, out = run(tmp_path / "Data.lsf.gz", "--json", tmp_path / "r.json", capsys=capsys)
+    assert code == 2 and "where another member begins" in one_line(out)
+    intact, ends = len(zlib.decompressobj(31).decompress(cut)) + k * size, frame_ends(log)
+    frames = sum(1 for begin, end in zip([0] + ends, ends) if end <= intact or begin >= (k + 1) * size)
+    assert report(tmp_path / "r.json")["read"].startswith(f"{frames:,} frames read")
+
+
 def test_a_bzip2_log_cut_short_is_one_line_with_every_whole_block_judged(tmp_path, capsys):
     data = gzip.decompress(EXCERPT.read_bytes())
     packed = bz2.compress(data, 1)  # blocks of 100 kB
@@ -733,3 +749,18 @@ def test_a_verdict_holds_whatever_the_offset_between_the_clocks(skew, delay, own
         assert verdict == "PASS"
     if delay > 5 + period + 1.001:
         assert verdict == "FAIL"
+
+
+def test_messages_outside_the_suite_are_named_as_imc_xml_names_them(tmp_path, capsys):
+    """A vehicle's ServoPosition (id 281, which IMC.xml defines and the suite does not cover) is named in the note,
+    not called "id 281"; an id no IMC.xml defines is still an id."""
+    fetch_imc_xml()  # the whole IMC.xml in the cache (never fetched by a judgement): it names the messages
+
+    def sound(mgid: int, payload: bytes) -> bytes:
+        body = struct.pack("<HHHdHBHB", 0xFE54, mgid, len(payload), 1.7e9, VEHICLE, 0, 0xFFFF, 0xFF) + payload
+        return body + struct.pack("<H", arc(body))
+    (tmp_path / "Data.lsf").write_bytes(sound(281, bytes(5)) * 3 + sound(999, b"") + heartbeats(1.7e9, 2))
+    code, out = run(tmp_path / "Data.lsf", "--json", tmp_path / "r.json", capsys=capsys)
+    notes = " ".join(report(tmp_path / "r.json")["notes"])
+    assert code == 0 and "does not cover (framing checked only): ServoPosition (3)" in notes and "id 281" not in notes
+    assert "names (a newer protocol, or a private message; framing checked only, never a failure): id 999 (1)" in notes

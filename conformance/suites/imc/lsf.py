@@ -53,9 +53,10 @@ class LsfReader:
     def units(self, pieces: Iterator[bytes], damage: list[str], name: str) -> Iterator[Logged]:
         buf, pos, base, number = b"", 0, 0, 0  # base: the log's byte at buf[0]
         skipped, ids = _Skipped(), self.ids
+        cut = False  # the bytes before the next frame are the rest of the one the stream's damage cut
         for piece in chain(pieces, (b"",)):  # then b"": the end of the log
-            if piece is GAP:  # what follows does not follow (damage the stream said): the frame it cuts is dropped
-                buf, base, pos = b"", base + len(buf), 0
+            if piece is GAP:  # what follows does not follow (damage the stream said): the frame it cuts is dropped,
+                buf, base, pos, cut = b"", base + len(buf), 0, True  # its rest too (the damage's line says so)
                 continue
             last = not piece
             buf, base, pos = buf[pos:] + piece, base + pos, 0
@@ -69,17 +70,18 @@ class LsfReader:
                     if end <= n and buf[pos + 2:pos + 4] in ids[order]:
                         number += 1
                         yield Logged(number, t, base + pos, buf[pos:end], system=src)
-                        pos = end
+                        pos, cut = end, False
                         continue
                 what, end, t = self._at(buf, pos, n, last)
                 if what is FRAME:
                     number += 1
                     yield Logged(number, t, base + pos, buf[pos:end], system=HEAD[buf[pos:pos + 2]].unpack_from(
                         buf, pos)[4])
-                    pos = end
+                    pos, cut = end, False
                 elif what is NONE:
                     found = self._next_frame(buf, pos, n, last)
-                    skipped.add(base + pos, found - pos)
+                    if not cut:
+                        skipped.add(base + pos, found - pos)
                     pos = found
                 else:
                     break  # MORE: the rest is in the next piece; CUT: the log ends inside this frame
