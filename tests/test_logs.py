@@ -682,9 +682,11 @@ def test_a_log_of_three_systems_on_skewed_clocks_is_judged_as_on_one_clock(tmp_p
         assert not any("clock jumped" in n for n in doc["notes"])
         counts.append({i: c for i, c in doc["counts"].items() if "/exchange/" in i})
     assert counts[0] == counts[1] and len(counts[1]) == 11
-    assert counts[1][SYSTEMS_ANSWERED]["PASS"].startswith("113 exchanges")
+    answered = {i.split("/")[-2]: int(c["PASS"].split()[0]) for i, c in counts[1].items() if i.endswith("/answered")}
+    assert answered == {"acoustic-operation": 226, "acoustic-request": 226, "iridium-transmission": 57,
+                        "acoustic-systems": 113}  # the manual's figures (captures-and-logs.md, skewed_log.py)
     clocks = next(n for n in doc["notes"] if n.startswith("the log is timed by the clock of system 30"))
-    assert "19696 (509 frames, stamped 41.9 to 41.9 s behind); 31 (226 frames, stamped 12.1 to 12.1 s ahead)" in clocks
+    assert clocks.endswith("19696 (509 frames, stamped 41.9 s behind), 31 (226 frames, stamped 12.1 s ahead)")
 
 
 @pytest.mark.parametrize("after", ["another system's frame stamped 12 s behind", "the vehicle's clock set back"])

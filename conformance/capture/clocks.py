@@ -158,14 +158,12 @@ class LogClocks:
         out = []
         if self.others:
             named = sorted(self.others.items(), key=lambda kv: -kv[1][0])
-            listed = "; ".join(f"{system} ({n:,} frame{'s' if n != 1 else ''}, {_offset(low, high)})"
+            listed = ", ".join(f"{system} ({n:,} frame{'s' if n != 1 else ''}, {_offset(low, high)})"
                                for system, (n, low, high) in named[:LISTED])
-            more = f"; and {len(named) - LISTED} more" if len(named) > LISTED else ""
+            more = f", and {len(named) - LISTED} more" if len(named) > LISTED else ""
             out.append(f"the log is timed by the clock of system {self.own}, which stamped most of its first frames; "
-                       f"{len(named)} other system{'s' if len(named) != 1 else ''} by their frames' place among its "
-                       "frames (the log's order is their order of arrival: each lies between the one before and the "
-                       "one after), whatever their own clocks: an exchange passes when within its bound at the latest, "
-                       "fails when past it at the earliest, and is inconclusive only between: "
+                       f"the frames of {len(named)} other system{'s' if len(named) != 1 else ''} by their place between "
+                       "its frames (the log's order is the order of arrival), whatever their own clocks: "
                        f"{listed}{more}")
         if self.off_clock:
             out.append(f"{self.off_clock:,} frame{'s' if self.off_clock != 1 else ''} of the logging system stamped "
@@ -183,9 +181,12 @@ def _timed(t: float) -> bool:
 
 
 def _offset(low: float, high: float) -> str:
-    """How a system's stamps stood against the log's clock when its frames arrived."""
+    """How a system's stamps stood against the log's clock when its frames came (``low`` to ``high`` seconds ahead)."""
+    shown = [f"{abs(v):.1f}" for v in (low, high)]
+    if shown[0] == shown[1] and (low < 0) == (high < 0):
+        return f"stamped {shown[0]} s {'behind' if low < 0 else 'ahead'}"
     if high < 0:
-        return f"stamped {-high:.1f} to {-low:.1f} s behind"
-    if low > 0:
-        return f"stamped {low:.1f} to {high:.1f} s ahead"
-    return f"stamped from {-low:.1f} s behind to {high:.1f} s ahead"
+        return f"stamped {shown[1]} to {shown[0]} s behind"
+    if low >= 0:
+        return f"stamped {shown[0]} to {shown[1]} s ahead"
+    return f"stamped from {shown[0]} s behind to {shown[1]} s ahead"
