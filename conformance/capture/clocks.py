@@ -36,11 +36,13 @@ LISTED = 8  # other systems named in a note
 
 
 class LogClocks:
-    """The clocks of one log (several files judged at once are one log). ``observe`` takes a watched frame once
+    """The clocks of one log (several files judged at once are one log): its exchanges followed by ``tracker``
+    (``next_deadline`` read, to call ``due`` only when something is due); ``observe`` takes a watched frame once
     timed, ``due`` judges the exchanges whose bound passed by a time, ``split`` closes the exchanges open at a jump."""
 
-    def __init__(self, observe: Callable[[Watched], None], due: Callable[[float], None], split: Callable[[], None]):
-        self.observe, self.due, self.split = observe, due, split
+    def __init__(self, tracker, observe: Callable[[Watched], None], due: Callable[[float], None],
+                 split: Callable[[], None]):
+        self.tracker, self.observe, self.due, self.split = tracker, observe, due, split
         self.own: object = None  # the logging system (None: the format names no system, or none was seen)
         self.now = 0.0  # its clock: the latest stamp of its frames on it
         self.origin: float | None = None
@@ -69,32 +71,32 @@ class LogClocks:
         """The time on the log's clock of the next frame (from ``system``, stamped ``stamp``): its stamp, or for a
         frame timed by its place, the earliest (its bracket is closed by the logging system's next frame). Runs the
         clock: closes the brackets open, judges what is due, splits the log at a jump."""
-        self.running = None
-        if system != self.own or not _timed(stamp):
-            self.exact = False
-            if not _timed(stamp):
-                self.untimed += 1
-            else:
-                other = self.others.get(system)
-                if other is None:
-                    self.others[system] = [1, stamp - self.now, stamp - self.now]
-                else:
-                    other[0] += 1
-                    other[1], other[2] = min(other[1], stamp - self.now), max(other[2], stamp - self.now)
-            return self.now
-        now, c = self.now, self.candidate
-        if now - CLOCK_BACK <= stamp <= now + CLOCK_JUMP:  # on its clock
-            if c is not None:
-                self.off_clock += c[2]
+        now = self.now
+        if system == self.own and now - CLOCK_BACK <= stamp <= now + CLOCK_JUMP:  # the logging system's, on its clock
+            if self.candidate is not None:  # the frames off it were no jump
+                self.off_clock += self.candidate[2]
                 self.candidate = None
             self.exact = True
             if self.held:
                 self._close(stamp + CLOCK_BACK)
             if stamp > now:
                 self.now = stamp
-                self.due(stamp - CLOCK_BACK)  # a frame stamped up to CLOCK_BACK behind may still answer
+                if stamp - CLOCK_BACK > self.tracker.next_deadline:
+                    self.due(stamp - CLOCK_BACK)  # a frame stamped up to CLOCK_BACK behind may still answer
             return stamp
-        self.exact = False
+        self.exact, self.running = False, None
+        if system != self.own or not _timed(stamp):
+            if not _timed(stamp):
+                self.untimed += 1
+            else:
+                other = self.others.get(system)
+                if other is None:
+                    self.others[system] = [1, stamp - now, stamp - now]
+                else:
+                    other[0] += 1
+                    other[1], other[2] = min(other[1], stamp - now), max(other[2], stamp - now)
+            return now
+        c = self.candidate
         if c is not None and c[1] - CLOCK_BACK <= stamp <= c[1] + CLOCK_JUMP:  # running on with the frames off it
             c[1], c[2] = max(c[1], stamp), c[2] + 1
             if c[1] - c[0] >= CONFIRM:
@@ -114,7 +116,7 @@ class LogClocks:
         if self.exact and not self.held:
             self.observe(w)
             return
-        self.held.append((w, self.running))
+        self.held.append((w, None if self.exact else self.running))
         if len(self.held) > HELD:
             self._close(NEVER)
 
@@ -140,7 +142,8 @@ class LogClocks:
         for w, _ in held[:at]:
             w.latest = NEVER
             self.observe(w)
-        self.due(self.now)
+        if self.now > self.tracker.next_deadline:
+            self.due(self.now)
         self.split()
         self.jumps += 1
         now = c[0]

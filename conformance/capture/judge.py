@@ -80,7 +80,8 @@ class CaptureJudge:
         self.plain = not self.filtered and not self.groups  # nothing narrows the frames judged
         self.lost = 0  # datagrams the watcher lost before it could read them (the kernel dropped them)
         self.log = log  # the frames come from logs (``logged``), not from datagrams
-        self.clocks = LogClocks(self._observe, self._due, self._split) if log else None
+        self.clocks = LogClocks(self.tracker, self._observe, self._due, self._split) if log else None
+        self.tick = self.clocks.tick if log else None  # a log's frame's time on its clock (the hot path: bound once)
         self.waiting: list | None = [] if log else None  # a log's first frames, until its logging system is chosen
         self.waiting_bytes = 0
         self.across = 0  # exchanges open across a split of a log
@@ -124,8 +125,7 @@ class CaptureJudge:
             if len(waiting) >= CHOOSE or self.waiting_bytes >= CHOOSE_BYTES:
                 self._choose()
             return
-        got.time = self.clocks.tick(got.system, got.time)
-        self.last = self.clocks.now
+        got.time = self.tick(got.system, got.time)
         self.records += 1
         if source is not self.source or not self.sources:
             self._from(source)
@@ -150,10 +150,9 @@ class CaptureJudge:
 
     def _due(self, now: float) -> None:
         """Judge the exchanges whose bound passed by ``now`` on a log's clock (it runs on every frame)."""
-        if now > self.tracker.next_deadline:
-            for finding in self.tracker.due(now):
-                if not self.groups or finding.group in self.groups:
-                    self._tally(finding)
+        for finding in self.tracker.due(now):
+            if not self.groups or finding.group in self.groups:
+                self._tally(finding)
 
     def _split(self) -> None:
         """The log's clock jumped: a new stretch begins, and the exchanges open are closed."""
@@ -273,6 +272,7 @@ class CaptureJudge:
             self._choose()
         if self.clocks is not None:
             self.clocks.end()
+            self.last = self.clocks.now
         end = self.last if until is None else max(self.last, until)
         if self.selection.end is not None and self.origin is not None:
             end = min(end, self.origin + self.selection.end)
