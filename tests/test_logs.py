@@ -725,31 +725,37 @@ def judged_exchange(frames: list[tuple[float, bytes]]) -> str:
     return {c.id: c.verdict.name for m in result.messages for c in m.cases}.get(QUERY_ANSWERED, "none")
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=80, deadline=None)
 @given(skew=st.floats(-100, 100), delay=st.one_of(st.none(), st.floats(0, 12)), own_asks=st.booleans(),
-       period=st.sampled_from([0.05, 0.3, 1.0]))
-def test_a_verdict_holds_whatever_the_offset_between_the_clocks(skew, delay, own_asks, period):
+       period=st.sampled_from([0.05, 0.3, 1.0]), jump=st.sampled_from([0.0, 0.0, -3600.0, -20.0, 25.0, 5000.0]),
+       jump_at=st.floats(0, 40))
+def test_a_verdict_holds_whatever_the_offset_between_the_clocks(skew, delay, own_asks, period, jump, jump_at):
     """The vehicle logs its heartbeats every ``period`` s for 40 s; at 5 s a query passes between it and a peer whose
-    clock is ``skew`` s off, and the reply comes ``delay`` s later (None: never). A late reply never PASSes, one
-    within the bound never FAILs, a missed one always FAILs; and the verdict is decided outside the bracket's width
-    (the period, and the 1 s a frame may be logged after its stamp)."""
+    clock is ``skew`` s off, and the reply comes ``delay`` s later (None: never); the vehicle's clock may be set by
+    ``jump`` s at ``jump_at`` s. A late reply never PASSes, one within the bound never FAILs; on a clock never set, a
+    missed one always FAILs and the verdict is decided outside the bracket's width (the period, and the 1 s a frame
+    may be logged after its stamp)."""
     start = 1.7e9
     asker, answerer = (VEHICLE, PEER) if own_asks else (PEER, VEHICLE)
-    stamp = {VEHICLE: 0.0, PEER: skew}
-    frames = [(i * period, frame("Heartbeat", start + i * period, VEHICLE, 0xFFFF)) for i in range(int(40 / period))]
-    frames.append((5.0001, frame("AcousticSystemsQuery", start + 5.0001 + stamp[asker], asker, answerer)))
+
+    def stamp(system: int, t: float) -> float:
+        return start + t + (skew if system == PEER else jump if t >= jump_at else 0.0)
+    frames = [(i * period, frame("Heartbeat", stamp(VEHICLE, i * period), VEHICLE, 0xFFFF))
+              for i in range(int(40 / period))]
+    frames.append((5.0001, frame("AcousticSystemsQuery", stamp(asker, 5.0001), asker, answerer)))
     if delay is not None:
-        frames.append((5.0001 + delay, frame("AcousticSystems", start + 5.0001 + delay + stamp[answerer], answerer,
-                                             asker, {"list": "b1"})))
+        frames.append((5.0001 + delay, frame("AcousticSystems", stamp(answerer, 5.0001 + delay), answerer, asker,
+                                             {"list": "b1"})))
     verdict = judged_exchange(frames)
+    assert verdict != "PASS" or delay is not None and delay <= 5, (verdict, delay)
+    assert verdict != "FAIL" or delay is None or delay > 5, (verdict, delay)
+    if jump:
+        return
     if delay is None:
         assert verdict == "FAIL"
-        return
-    assert verdict != "PASS" or delay <= 5, (verdict, delay)
-    assert verdict != "FAIL" or delay > 5, (verdict, delay)
-    if delay < 5 - period - 1.001:
+    elif delay < 5 - period - 1.001:
         assert verdict == "PASS"
-    if delay > 5 + period + 1.001:
+    elif delay > 5 + period + 1.001:
         assert verdict == "FAIL"
 
 

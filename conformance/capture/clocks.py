@@ -30,7 +30,7 @@ CONFIRM = 1.0  # seconds the logging system's frames run on a new clock before i
 MAX_TIME = 1e11  # seconds since the epoch: a stamp beyond (or not a number) is no time
 CHOOSE = 1000  # first frames of a log the logging system is chosen among
 CHOOSE_BYTES = 8 << 20  # bytes of those frames at most (they are held until it is chosen)
-HELD = 4096  # watched frames held for the end of their bracket at most (beyond, their latest time is unknown)
+HELD = 1024  # watched frames held for the end of their bracket at most (beyond, their latest time is unknown)
 NEVER = float("inf")
 LISTED = 8  # other systems named in a note
 
