@@ -49,6 +49,7 @@ class _Open:
     terminal: Watched | None = None
     open_end: str | None = None  # the ambiguity id when its last state is one the seeds leave open
     orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
+    unsure: bool = False  # its first reply may have come after its bound (a log's clocks tell no closer)
 
 
 class PassiveExchanges:
@@ -196,6 +197,7 @@ class PassiveExchanges:
         if not o.answered:  # not past the bound: a request is judged unanswered once its bound has surely passed
             o.answered = True
             late = self._late(o, w)
+            o.unsure = bool(late)
             out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE if late else Verdict.PASS, ex["clause"],
                                      late and f"{ex['reply']} {late}", w))
         if o.states is not None:
@@ -277,8 +279,9 @@ class PassiveExchanges:
 
     def _judge_expired(self, o: _Open) -> list[Finding]:
         findings = self._expired(o)
-        why = next((why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
-                    and (systems is None or o.request.src in systems)), None)
+        why = "its first reply may have come after the bound (the log's clocks tell no closer)" if o.unsure else next(
+            (why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
+             and (systems is None or o.request.src in systems)), None)
         if why is not None:
             for f in findings:  # the reply, or the right one, may have been lost
                 if f.verdict in (Verdict.FAIL, Verdict.NON_STRICT):
