@@ -712,9 +712,9 @@ def test_a_missed_reply_fails_whatever_frames_come_after(log, tmp_path, capsys, 
     assert "no AcousticSystems from system 30 to 19696 within 5 s" in " ".join(doc["details"][QUERY_ANSWERED])
 
 
-def judged_exchange(frames: list[tuple[float, bytes]]) -> str:
-    """The verdict of the acoustic-systems exchange in a log of these frames (true time, bytes), in the order they
-    came."""
+def judged_exchange(frames: list[tuple[float, bytes]], case: str = QUERY_ANSWERED) -> str:
+    """The verdict of an exchange's case (the acoustic-systems one's answer) in a log of these frames (true time,
+    bytes), in the order they came."""
     reader = SUITE.log_reader()
     judge = CaptureJudge("imc", reader.rules, reader.edition, Selection(), log=True)
     data = b"".join(f for _, f in sorted(frames, key=lambda tf: tf[0]))
@@ -722,7 +722,7 @@ def judged_exchange(frames: list[tuple[float, bytes]]) -> str:
         judge.logged(unit)
     result = judge.result(implementation="x", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False,
                           title="IMC")
-    return {c.id: c.verdict.name for m in result.messages for c in m.cases}.get(QUERY_ANSWERED, "none")
+    return {c.id: c.verdict.name for m in result.messages for c in m.cases}.get(case, "none")
 
 
 @settings(max_examples=80, deadline=None)
@@ -757,6 +757,24 @@ def test_a_verdict_holds_whatever_the_offset_between_the_clocks(skew, delay, own
         assert verdict == "PASS"
     elif delay > 5 + period + 1.001:
         assert verdict == "FAIL"
+
+
+def test_a_reply_that_may_have_come_after_its_bound_leaves_the_rest_of_its_exchange_unjudged(tmp_path):
+    """The station (its clock 42 s late) sends an AcousticRequest, logged between the vehicle's frames of 5 and 5.5 s;
+    the vehicle's first status, QUEUED, is stamped 25.05 s: 18.55 to 20.05 s after (bound 20 s); no terminal state
+    follows: the answer is INCONCLUSIVE, and so is the missing terminal state (no
+    terminal state is due if the reply came after the bound, when the request went unanswered)."""
+    start, r = 1.7e9, lambda path, name: SUITE.wire.resolve("AcousticStatus", path, name, EDITION)  # noqa: E731
+    request = {"req_id": 7, "destination": "lauv-xplore-2", "timeout": 30.0, "range": 0.0,
+               "type": SUITE.wire.resolve("AcousticRequest", "type", "MSG", EDITION),
+               "msg": {"abbrev": "Heartbeat", "fields": {}}}
+    status = {"req_id": 7, "type": r("type", "MSG"), "status": r("status", "QUEUED"), "info": "", "range": 0.0}
+    frames = [(i * 0.5, frame("Heartbeat", start + i * 0.5, VEHICLE, 0xFFFF)) for i in range(120)]
+    frames += [(5.1, frame("AcousticRequest", start + 5.1 - 42, STATION, VEHICLE, request)),
+               (25.05, frame("AcousticStatus", start + 25.05, VEHICLE, STATION, status))]
+    case = "imc/AcousticRequest/capture/exchange/acoustic-request/"
+    assert judged_exchange(frames, case + "answered") == "INCONCLUSIVE"
+    assert judged_exchange(frames, case + "terminal") == "INCONCLUSIVE"
 
 
 def test_messages_outside_the_suite_are_named_as_imc_xml_names_them(tmp_path, capsys):
