@@ -790,3 +790,13 @@ def test_messages_outside_the_suite_are_named_as_imc_xml_names_them(tmp_path, ca
     notes = " ".join(report(tmp_path / "r.json")["notes"])
     assert code == 0 and "does not cover (framing checked only): ServoPosition (3)" in notes and "id 281" not in notes
     assert "names (a newer protocol, or a private message; framing checked only, never a failure): id 999 (1)" in notes
+
+
+def test_a_request_logged_before_the_logging_systems_first_frame_came_at_an_unknown_time(tmp_path):
+    """A peer's query is the log's first frame, then the vehicle's frames, its reply 0.5 s after the first: the query
+    may have come at any time before, so the reply is not a PASS (nor a FAIL)."""
+    start = 1.7e9
+    frames = [(0.0, frame("AcousticSystemsQuery", start + 12, PEER, VEHICLE))]
+    frames += [(0.1 + i * 0.5, frame("Heartbeat", start + 0.1 + i * 0.5, VEHICLE, 0xFFFF)) for i in range(60)]
+    frames.append((0.6, frame("AcousticSystems", start + 0.6, VEHICLE, PEER, {"list": "b1"})))
+    assert judged_exchange(frames) == "INCONCLUSIVE"

@@ -63,9 +63,10 @@ class LogClocks:
         if not frames:
             return
         self.own = Counter(f.system for f in frames).most_common(1)[0][0]
-        stamps = [f.time for f in frames if f.system == self.own and _timed(f.time)] or \
-            [f.time for f in frames if _timed(f.time)] or [0.0]
-        self.origin = self.now = stamps[0]
+        own = [f.time for f in frames if f.system == self.own and _timed(f.time)]
+        self.origin = self.now = (own or [f.time for f in frames if _timed(f.time)] or [0.0])[0]
+        if own and not (frames[0].system == self.own and _timed(frames[0].time)):
+            self.now = -NEVER  # the frames before its first came at any time before it
 
     def tick(self, system, stamp: float) -> float:
         """The time on the log's clock of the next frame (from ``system``, stamped ``stamp``): its stamp, or for a
@@ -85,10 +86,15 @@ class LogClocks:
                     self.due(stamp - CLOCK_BACK)  # a frame stamped up to CLOCK_BACK behind may still answer
             return stamp
         self.exact, self.running = False, None
+        if now == -NEVER and system == self.own and _timed(stamp):  # its first frame: the clock starts
+            self.now, self.exact = stamp, True
+            if self.held:
+                self._close(stamp + CLOCK_BACK)
+            return stamp
         if system != self.own or not _timed(stamp):
             if not _timed(stamp):
                 self.untimed += 1
-            else:
+            elif now != -NEVER:
                 other = self.others.get(system)
                 if other is None:
                     self.others[system] = [1, stamp - now, stamp - now]

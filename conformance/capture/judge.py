@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from ..core.results import CaseResult, CheckResult, MessageResult, RunResult, message_verdict
 from ..core.verdicts import Verdict, worst
 from ..wording import counted
-from .clocks import CHOOSE, CHOOSE_BYTES, CLOCK_BACK, CLOCK_JUMP, CONFIRM, LogClocks
+from .clocks import CHOOSE, CHOOSE_BYTES, CLOCK_BACK, CLOCK_JUMP, CONFIRM, NEVER, LogClocks
 from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched
 from .logs import Logged
@@ -365,8 +365,8 @@ class CaptureJudge:
             and len(self.sources) == 1 else ""))
                   for verdict, n in sorted(tally.counts.items(), key=lambda kv: kv[0].value)]
         for f in tally.listed:
-            at = f"at {f.time - self.origin:.6f} s, " if f.time is not None and self.origin is not None else \
-                "" if f.label else "at -, "
+            at = f"at {f.time - self.origin:.6f} s, " if f.time is not None and self.origin is not None and \
+                abs(f.time) != NEVER else "" if f.label else "at -, "  # NEVER: a log's frame before its clock began
             checks.append(CheckResult(f.label or f"frame {f.number}", f.verdict, f"{at}{f.where}: {f.detail}".rstrip(": "),
                                       actual=f.frame[:512].hex() if f.frame is not None else None, clause=f.clause))
         bad = sum(n for v, n in tally.counts.items() if v is not Verdict.PASS)

@@ -355,8 +355,10 @@ class PassiveExchanges:
         if _latest(w) - o.request.time <= within:
             return ""
         early, late = max(0.0, w.time - _latest(o.request)), _latest(w) - o.request.time
-        return (f"came {early:.3f} to {late:.3f} s after the request (bound {within:g} s): the log's clocks tell no "
-                "closer, not judged")
+        at_most = f"to {late:.3f} s" if late < float("inf") else "s or more (the request came before the log's " \
+            "clock began)"
+        return (f"came {early:.3f} {at_most} after the request (bound {within:g} s): the log's clocks tell no closer, "
+                "not judged")
 
     # ------------------------------------------------------------ shared
 
