@@ -69,7 +69,7 @@ class LsfReader:
                     end = pos + OVERHEAD + size
                     if end <= n and buf[pos + 2:pos + 4] in ids[order]:
                         number += 1
-                        yield Logged(number, t, base + pos, buf[pos:end], system=src)
+                        yield Logged(number, t, base + pos, buf[pos:end], None, None, src)  # positional: the hot path
                         pos, cut = end, False
                         continue
                 what, end, t = self._at(buf, pos, n, last)
