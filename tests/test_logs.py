@@ -800,3 +800,24 @@ def test_a_request_logged_before_the_logging_systems_first_frame_came_at_an_unkn
     frames += [(0.1 + i * 0.5, frame("Heartbeat", start + 0.1 + i * 0.5, VEHICLE, 0xFFFF)) for i in range(60)]
     frames.append((0.6, frame("AcousticSystems", start + 0.6, VEHICLE, PEER, {"list": "b1"})))
     assert judged_exchange(frames) == "INCONCLUSIVE"
+
+
+def test_requests_followed_at_once_are_bounded_when_the_logs_clock_stands(monkeypatch):
+    """The vehicle falls silent while 200 systems ask on: its clock stands, so no bound passes; the exchanges followed
+    at once stay within OPEN_LIMIT (the oldest left INCONCLUSIVE, never PASS or FAIL) instead of growing with the
+    log."""
+    from imc_conformance.kinds.scenario import passive
+
+    monkeypatch.setattr(passive, "OPEN_LIMIT", 16)
+    reader = SUITE.log_reader()
+    judge = CaptureJudge("imc", reader.rules, reader.edition, Selection(), log=True)
+    data = heartbeats(1.7e9, 5) + b"".join(frame("AcousticSystemsQuery", 1.7e9 + 5 + i, 100 + i, VEHICLE)
+                                           for i in range(200))
+    for unit in reader.units(iter([data]), [], "x"):
+        judge.logged(unit)
+    result = judge.result(implementation="x", started="2026-01-01T00:00:00+00:00", duration=0.0, strict=False,
+                          title="IMC")
+    assert max(len(q) for q in judge.tracker.open.values()) <= 16
+    case = next(c for m in result.messages for c in m.cases if c.id == QUERY_ANSWERED)
+    assert [k.detail for k in case.checks if k.check == "count"] == ["200 exchanges"] and case.verdict.name == \
+        "INCONCLUSIVE"

@@ -24,6 +24,8 @@ from .wire import Parsed
 
 LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT, "INFO": Verdict.IMPL_DEFINED}
 STATE_CACHE = 1024  # request values whose reply states are kept resolved
+OPEN_LIMIT = 1024  # requests of one exchange followed at once (beyond, the oldest is left unjudged: a flood of
+# requests, or a log whose logging system falls silent while others ask on, leaving its clock standing)
 
 
 @dataclass
@@ -96,7 +98,7 @@ class PassiveExchanges:
                 out += found or []
         for rule in () if answers else self.by_request.get(w.message, ()):
             if _matches(w.fields, rule.when) and not self._replying(w):
-                self._request(rule, w)
+                out += self._request(rule, w)
                 break
         return out
 
@@ -124,14 +126,7 @@ class PassiveExchanges:
         out, count = [], 0
         for queue in self.open.values():
             for o in queue:
-                if o.answered:
-                    found = [f for f in self._expired(o) if f.verdict is not Verdict.PASS]
-                else:
-                    found = [self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
-                                           f"no {o.rule.exchange['reply']} {self._between(o)} before {why}", o.request)]
-                for f in found:
-                    f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}" if o.answered \
-                        else f.detail
+                found = self._unjudged(o, why)
                 count += bool(found)
                 out += found
         for table in (self.open, self.ended):
@@ -140,6 +135,16 @@ class PassiveExchanges:
         self.keyed.clear()
         self.next_deadline = float("inf")
         return out, count
+
+    def _unjudged(self, o: _Open, why: str) -> list[Finding]:
+        """The findings on an exchange left open (``why``): INCONCLUSIVE, never PASS, never FAIL."""
+        if not o.answered:
+            return [self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
+                                  f"no {o.rule.exchange['reply']} {self._between(o)} before {why}", o.request)]
+        found = [f for f in self._expired(o) if f.verdict is not Verdict.PASS]
+        for f in found:
+            f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}"
+        return found
 
     def finish(self, end: float) -> list[Finding]:
         """Judge what the end of the capture decides; a request whose bound reaches past it is INCONCLUSIVE."""
@@ -155,21 +160,29 @@ class PassiveExchanges:
 
     # ------------------------------------------------------------ requests
 
-    def _request(self, rule: _Rule, w: Watched) -> None:
+    def _request(self, rule: _Rule, w: Watched) -> list[Finding]:
+        """Follow a request; the findings on one left unjudged to make room for it (OPEN_LIMIT)."""
         key = tuple(hashable(w.fields.get(e["request_field"])) for e in rule.echoes)
         same_key = self.keyed.setdefault((id(rule), key), [])
         if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
                for o in same_key):
-            return  # a resend of an open request is the same exchange
+            return []  # a resend of an open request is the same exchange
+        out, queue = [], self.open[id(rule)]
+        if len(queue) >= OPEN_LIMIT:
+            gone = queue.popleft()
+            if not gone.answered:
+                self.keyed[(id(rule), gone.key)].remove(gone)
+            out = self._unjudged(gone, f"{OPEN_LIMIT:,} later requests of its exchange were open at once (not "
+                                       "followed further)")
         o = _Open(rule, w, key, _latest(w) + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
         self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
-        queue = self.open[id(rule)]
         if queue and queue[-1].deadline > o.deadline:  # a request timed by a bracket may end before an earlier one
             queue.insert(bisect.bisect_right(queue, o.deadline, key=_deadline), o)
         else:
             queue.append(o)
         self.next_deadline = min(self.next_deadline, o.deadline)
+        return out
 
     # ------------------------------------------------------------ replies
 
