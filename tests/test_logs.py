@@ -1,7 +1,8 @@
 """Mission logs, IMC's LSF: DUNE's own log judged with the IMC.xml beside it, the same verdicts plain, gzip and bzip2,
 exchanges and filters as for captures, and hostile logs (cut at every kind of boundary, a wrong or missing IMC.xml, a
 decompression bomb, garbage after a stream, a frame claiming more than the file holds), each answered in one line
-within bounded memory and time, never a traceback.
+within bounded memory and time, never a traceback; and time in logs: several systems on their own clocks, timed by
+their place between the logging system's frames, its clock's jumps.
 
 ``tests/data/dune-log/Data.lsf.gz`` is the first six gzip members of the log DUNE's Logging task wrote as
 lauv-simulator-1 during ``make dune-record`` (DUNE from the imcpy 1.1.2 sdist, 2026-11-26): DUNE's own bytes. Its
@@ -34,7 +35,7 @@ from imc_conformance.suites import load_suite
 from imc_conformance.suites.imc import codec
 from imc_conformance.suites.imc.crc16 import arc
 from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
-from imc_conformance.suites.imc.traffic import write_log
+from imc_conformance.suites.imc.traffic import PEER, write_log
 
 SUITE = load_suite("imc")
 EDITION = "imc-5.4.30"
@@ -659,8 +660,6 @@ def test_a_request_stamped_in_the_past_is_timed_by_its_place_not_its_stamp(log, 
 
 # ---------------------------------------------------------------- each system on its own clock
 
-PEER = 31
-SYSTEMS_ANSWERED = QUERY_ANSWERED
 IRIDIUM_ANSWERED = "imc/IridiumMsgTx/capture/exchange/iridium-transmission/answered"
 
 
