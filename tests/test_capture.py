@@ -161,6 +161,9 @@ def test_a_datagram_cut_by_the_snaplen_is_inconclusive_not_invalid():
 
 
 def test_other_traffic_is_counted_apart():
+    from imc_conformance.suites.imc.imc_xml import fetch_imc_xml
+
+    fetch_imc_xml()  # the whole IMC.xml in the cache, which names the messages outside the suite
     outside = bytearray(frame("Heartbeat", src=VEHICLE, dst=STATION))
     struct.pack_into("<H", outside, 2, 350)  # EstimatedState: a message outside the suite
     outside[-2:] = struct.pack("<H", __import__("imc_conformance.suites.imc.crc16", fromlist=["crc16"]).crc16(
@@ -169,7 +172,7 @@ def test_other_traffic_is_counted_apart():
                 (3, udp(HEARTBEAT, dst=("10.0.0.30", 9999), src=("10.0.0.1", 9998))),
                 (4, Ether(type=0x0806).build() + bytes(28))])
     result = judge(buf)
-    assert result.notes[1].startswith("1 frame of 1 message the suite does not cover (framing checked only): id 350 (1)")
+    assert result.notes[1].startswith("1 frame of 1 message the suite does not cover (framing checked only): EstimatedState (1)")
     assert "1 not judged: datagrams on the ports that are not frames of the suite" in result.notes
     assert "1 not judged: UDP on other ports" in result.notes
     assert "1 not judged: not IP" in result.notes

@@ -18,6 +18,7 @@ from imc_conformance.suites.imc.node import ReferenceNode
 from live_harness import NODE, recorded_run, run_virtual
 
 TRAFFIC = "vehicle-traffic"
+NAMED = {350: "EstimatedState", 1: "EntityState", 7: "CpuUsage", 254: "EulerAngles", 263: "Temperature"}  # IMC.xml's
 
 
 def sound(defs, mgid: int, payload: bytes, e: str = "<") -> bytes:
@@ -52,7 +53,7 @@ def test_a_vehicles_other_traffic_fails_no_scenario_and_is_counted(suite, cases,
     extra = {k: v for k, v in verdicts.items() if k not in {c.id for c in reference.cases}}
     assert extra and all(k.startswith("imc/HistoricData/passive/") and v == Verdict.PASS for k, v in extra.items())
     known = next(n for n in result.notes if "messages the suite does not cover (framing checked only)" in n)
-    assert all(f"id {i} (" in known for i in (350, 1, 7, 254, 263)) and "id 999" not in known
+    assert all(f"{name} (" in known for name in NAMED.values()) and "id 999" not in known
     undefined = next(n for n in result.notes if "no definition the suite has names" in n)
     assert "id 999 (" in undefined and "never a failure" in undefined
 
@@ -74,7 +75,8 @@ def test_a_recorded_run_with_that_traffic_is_judged_alike_by_pcap(suite, cases, 
         judged = {k: v for k, v in judged.items() if k not in unjudged}
         alike = {k: v for k, v in alike.items() if k not in unjudged and v != "INCONCLUSIVE"}
     assert {k: v for k, v in judged.items() if "/capture/" not in k} == alike
-    assert any("id 350 (" in n and "does not cover" in n for n in doc["notes"])
+    named = "EstimatedState" if whole_xml == "cached" else "id 350"  # named as the whole IMC.xml names it
+    assert any(f"{named} (" in n and "does not cover" in n for n in doc["notes"])
     assert any("id 999 (" in n and "no definition" in n for n in doc["notes"])
 
 
@@ -87,14 +89,15 @@ def test_a_log_with_that_traffic_is_judged_alike(suite, tmp_path, capsys):
     assert main(["log", str(tmp_path / "Data.lsf"), "--json", str(tmp_path / "log.json")]) == 0
     doc = json.loads((tmp_path / "log.json").read_text())
     assert [c["verdict"] for m in doc["messages"] for c in m["cases"]] == ["PASS", "PASS"]  # HistoricData, Heartbeat
-    assert any("id 263 (1)" in n for n in doc["notes"]) and any("id 999 (1)" in n for n in doc["notes"])
+    assert any("Temperature (1)" in n for n in doc["notes"]) and any("id 999 (1)" in n for n in doc["notes"])
 
 
 @pytest.mark.parametrize("order", ["<", ">"])
 def test_the_wire_tells_other_traffic_from_a_broken_frame_in_either_byte_order(suite, order):
+    fetched_whole_xml()  # which names the messages outside the suite
     wire, defs = suite.wire, suite.defs
     other = wire.parse(sound(defs, 350, bytes(88), order))
-    assert (other.outside, other.undefined, other.problem, other.decoded) == ("id 350", False, None, None)
+    assert (other.outside, other.undefined, other.problem, other.decoded) == ("EstimatedState", False, None, None)
     assert wire.parse(sound(defs, 999, b"\x01", order)).undefined
     damaged = bytearray(sound(defs, 350, bytes(88), order))
     damaged[-1] ^= 1
@@ -115,7 +118,7 @@ def test_watch_judges_that_traffic_alike(suite):
         judge.received(Datagram(i + 1, 1.7e9 + i, "127.0.0.1", 6002, "127.0.0.1", 6001, payload))
     result = judge.result(implementation="watch", started="", duration=0.0, strict=True, title="watch")
     assert result.exit_code() == 0 and {c.verdict for c in result.cases} == {Verdict.PASS}  # its HistoricData alone
-    assert any("id 350 (1)" in n and "does not cover" in n for n in result.notes)
+    assert any("EstimatedState (1)" in n and "does not cover" in n for n in result.notes)
     assert any("id 999 (1)" in n and "never a failure" in n for n in result.notes)
 
 

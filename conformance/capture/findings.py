@@ -47,7 +47,9 @@ class Finding:
 
 @dataclass(slots=True)
 class Watched:
-    """A valid frame an exchange watches: where and when it was seen, its message, fields and addressing."""
+    """A valid frame an exchange watches: where and when it was seen, its message, fields and addressing. ``time``
+    is the earliest it can have been seen and ``latest`` the latest (None: ``time`` exactly; a frame of a log
+    stamped by another system's clock is known only to lie between two of the logging system's frames)."""
 
     number: int
     time: float
@@ -56,6 +58,7 @@ class Watched:
     src: int | None
     dst: int | None
     where: object = ""  # the datagram that carried it
+    latest: float | None = None
 
 
 class CaptureRules(Protocol):
@@ -73,6 +76,13 @@ class CaptureRules(Protocol):
 
 
 class ExchangeTracker(Protocol):
+    next_deadline: float  # the earliest bound of an exchange open
+
     def observe(self, frame: Watched) -> list[Finding]: ...
+
+    def due(self, now: float) -> list[Finding]:
+        """Judge every exchange whose bound has passed by ``now`` (a clock that runs without watched frames)."""
+
+    def split(self, why: str) -> tuple[list[Finding], int]: ...
 
     def finish(self, end: float) -> list[Finding]: ...

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from ..core.results import CaseResult, CheckResult, MessageResult, RunResult, message_verdict
 from ..core.verdicts import Verdict, worst
 from ..wording import counted
+from .clocks import CHOOSE, CHOOSE_BYTES, CLOCK_BACK, CLOCK_JUMP, CONFIRM, NEVER, LogClocks
 from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched
 from .logs import Logged
@@ -21,9 +22,6 @@ from .records import Record
 
 FRAME_CLAUSE = "the byte rules of the suite's corpus (rules.json)"
 RECENT = 256  # watched frames remembered to recognise a datagram the network duplicated
-CLOCK_JUMP = 10.0  # seconds a log's clock may jump ahead before it splits the log (exchanges across go unjudged)
-CLOCK_BACK = 1.0  # seconds a frame may be stamped behind the log's clock (logged out of order: DUNE's, up to 0.15 s)
-MAX_TIME = 1e11  # seconds since the epoch: a logged frame's timestamp beyond (or not a number) is no time
 
 
 @dataclass
@@ -82,9 +80,11 @@ class CaptureJudge:
         self.plain = not self.filtered and not self.groups  # nothing narrows the frames judged
         self.lost = 0  # datagrams the watcher lost before it could read them (the kernel dropped them)
         self.log = log  # the frames come from logs (``logged``), not from datagrams
-        self.jumps = 0  # times a log's clock jumped (the splits of the log into stretches)
-        self.across = 0  # exchanges open across a split
-        self.high = float("-inf")  # the log's clock before its last jump back, at the latest
+        self.clocks = LogClocks(self.tracker, self._observe, self._due, self._split) if log else None
+        self.tick = self.clocks.tick if log else None  # a log's frame's time on its clock (the hot path: bound once)
+        self.waiting: list | None = [] if log else None  # a log's first frames, until its logging system is chosen
+        self.waiting_bytes = 0
+        self.across = 0  # exchanges open across a split of a log
 
     def losses(self, start: float, end: float, count: int) -> None:
         """``count`` datagrams were lost between ``start`` and ``end`` (a live watcher's receive buffer)."""
@@ -116,23 +116,16 @@ class CaptureJudge:
 
     def logged(self, got: Logged, source: str = "") -> None:
         """Judge one frame of a log (``source`` names its file when there are several). A log records no time of
-        reception: every frame is timed by its own timestamp, the log's clock being the latest of them. A frame
-        stamped more than CLOCK_JUMP seconds ahead of the clock, or more than CLOCK_BACK behind it (a gap in the log,
-        its clock set, another system's clock), or with no time, splits the log into stretches timed apart: every
-        exchange open across a split is INCONCLUSIVE (``_split``). So does a frame that brings the clock back to where
-        it was before it jumped back (a frame stamped in the past, then the log's time again: the request it held was
-        not sent when it says). Within CLOCK_BACK behind, a frame was logged after a later-stamped one (DUNE stamps a
-        message when its task dispatches it, not when it is logged)."""
-        t, last = got.time, self.last
-        if self.origin is None:
-            t = got.time = self.origin = self.last = t if -MAX_TIME < t < MAX_TIME else 0.0
-        elif not -MAX_TIME < t < MAX_TIME:  # no time (not a number, or beyond any date): timed by the clock
-            self._split(last)
-            got.time = last
-        elif t > last + CLOCK_JUMP or t < last - CLOCK_BACK or last < self.high - CLOCK_BACK <= t:
-            self._split(t)
-        elif t > last:
-            self.last = t
+        reception: its frames are timed on the logging system's clock (``clocks.LogClocks``), chosen among its first
+        frames, which are held until then."""
+        waiting = self.waiting
+        if waiting is not None:
+            waiting.append((got, source))
+            self.waiting_bytes += len(got.payload)
+            if len(waiting) >= CHOOSE or self.waiting_bytes >= CHOOSE_BYTES:
+                self._choose()
+            return
+        got.time = self.tick(got.system, got.time)
         self.records += 1
         if source is not self.source or not self.sources:
             self._from(source)
@@ -141,16 +134,33 @@ class CaptureJudge:
             return
         self._judge_unit(got, False, got.channel)
 
-    def _split(self, t: float) -> None:
-        """The log's clock jumped to ``t``: a new stretch begins there, and the exchanges open are closed."""
+    def _choose(self) -> None:
+        """Choose a log's logging system among its first frames, and judge them."""
+        waiting, self.waiting = self.waiting, None
+        self.clocks.choose([got for got, _ in waiting])
+        self.origin, self.last = self.clocks.origin, self.clocks.now
+        for got, source in waiting:
+            self.logged(got, source)
+
+    def _observe(self, w: Watched) -> None:
+        """Follow the exchanges through a watched frame."""
+        for finding in self.tracker.observe(w):
+            if not self.groups or finding.group in self.groups:
+                self._tally(finding)
+
+    def _due(self, now: float) -> None:
+        """Judge the exchanges whose bound passed by ``now`` on a log's clock (it runs on every frame)."""
+        for finding in self.tracker.due(now):
+            if not self.groups or finding.group in self.groups:
+                self._tally(finding)
+
+    def _split(self) -> None:
+        """The log's clock jumped: a new stretch begins, and the exchanges open are closed."""
         findings, count = self.tracker.split("the log's clock jumped meanwhile")
         for finding in findings:
             if not self.groups or finding.group in self.groups:
                 self._tally(finding)
-        self.jumps += 1
         self.across += count
-        self.high = max(self.high, self.last)
-        self.last = t
 
     def found(self, f: Finding, source: str = "") -> None:
         """Tally what a log says of its frames (a bag connection's definition), as it is found."""
@@ -225,10 +235,11 @@ class CaptureJudge:
             self.recent[got.payload] = None
             if len(self.recent) > RECENT:
                 del self.recent[next(iter(self.recent))]
-            for finding in self.tracker.observe(Watched(got.number, got.time, group, frame.fields,
-                                                        frame.src, frame.dst, got)):
-                if not self.groups or finding.group in self.groups:
-                    self._tally(finding)
+            watched = Watched(got.number, got.time, group, frame.fields, frame.src, frame.dst, got)
+            if self.clocks is None:
+                self._observe(watched)
+            else:
+                self.clocks.watch(watched)
 
     def _judge_frame(self, group: str, frame, got: Datagram | Logged) -> None:
         """Tally a frame's verdict (and keep it for the corpus an adapter decodes)."""
@@ -257,6 +268,11 @@ class CaptureJudge:
     def result(self, *, implementation: str, started: str, duration: float, strict: bool, title: str,
                notes: list[str] = (), complete: bool = True, until: float | None = None) -> RunResult:
         """The run result; ``until``: when watching ended (default: the last record, or the window's end)."""
+        if self.waiting is not None:
+            self._choose()
+        if self.clocks is not None:
+            self.clocks.end()
+            self.last = self.clocks.now
         end = self.last if until is None else max(self.last, until)
         if self.selection.end is not None and self.origin is not None:
             end = min(end, self.origin + self.selection.end)
@@ -292,7 +308,8 @@ class CaptureJudge:
         return sorted(by_group.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0]))
 
     def notes(self) -> list[str]:
-        span = f", from {_when(self.origin)}" + ("" if self.jumps else f" for {self.last - self.origin:.3f} s") \
+        jumps = self.clocks.jumps if self.clocks is not None else 0
+        span = f", from {_when(self.origin)}" + ("" if jumps else f" for {self.last - self.origin:.3f} s") \
             if self.origin else ""  # a log split by its clock's jumps spans no one stretch of time
         if self.log:
             out = [f"{counted(self.records, 'frame', grouped=True)} read, {self.datagrams:,} judged{span}"]
@@ -313,11 +330,13 @@ class CaptureJudge:
             out.append(f"{self.duplicates:,} frames identical to one shortly before were judged once by the exchange "
                        "rules" if self.log else f"{self.duplicates:,} datagrams identical to one shortly before "
                        "(duplicated by the network) were judged once by the exchange rules")
-        if self.jumps:
-            out.append(f"the log's clock jumped {counted(self.jumps, 'time', grouped=True)} (ahead by more than "
-                       f"{CLOCK_JUMP:g} s, back by more than {CLOCK_BACK:g} s and again to where it was, or a frame with "
-                       "no time: a gap in the log, its clock set, another system's clock, a message kept with its first "
-                       f"time), splitting it into {self.jumps + 1:,} stretches timed apart: "
+        if self.clocks is not None:
+            out += self.clocks.notes()
+        if jumps:
+            out.append(f"the log's clock jumped {counted(jumps, 'time', grouped=True)} (ahead by more than "
+                       f"{CLOCK_JUMP:g} s or back by more than {CLOCK_BACK:g} s, the logging system's frames running on "
+                       f"from there for {CONFIRM:g} s: a gap in the log, its clock set), splitting it into "
+                       f"{jumps + 1:,} stretches timed apart: what was due before a jump judged, "
                        f"{counted(self.across, 'exchange', grouped=True)} open across a split INCONCLUSIVE")
         if self.dissector.held or self.dissector.given_up:
             out.append(f"{len(self.dissector.held) + self.dissector.given_up:,} IP datagrams never reassembled "
@@ -346,8 +365,8 @@ class CaptureJudge:
             and len(self.sources) == 1 else ""))
                   for verdict, n in sorted(tally.counts.items(), key=lambda kv: kv[0].value)]
         for f in tally.listed:
-            at = f"at {f.time - self.origin:.6f} s, " if f.time is not None and self.origin is not None else \
-                "" if f.label else "at -, "
+            at = f"at {f.time - self.origin:.6f} s, " if f.time is not None and self.origin is not None and \
+                abs(f.time) != NEVER else "" if f.label else "at -, "  # NEVER: a log's frame before its clock began
             checks.append(CheckResult(f.label or f"frame {f.number}", f.verdict, f"{at}{f.where}: {f.detail}".rstrip(": "),
                                       actual=f.frame[:512].hex() if f.frame is not None else None, clause=f.clause))
         bad = sum(n for v, n in tally.counts.items() if v is not Verdict.PASS)

@@ -21,7 +21,8 @@ class Logged:
     begins at, or in a bag the byte its chunk begins at, ``inner`` its byte within the chunk's data), its time in
     seconds since the epoch (the frame's own timestamp, or when it was recorded), its bytes, and ``channel``: for a
     format whose frames do not name their message (a bag's connection), the object that judges them
-    (``channel.frame(payload) -> Frame``), else None (the suite's ``CaptureRules.frame``)."""
+    (``channel.frame(payload) -> Frame``), else None (the suite's ``CaptureRules.frame``); ``system``: the system
+    whose clock stamped it (its sender), where the format names one."""
 
     number: int
     time: float
@@ -29,6 +30,7 @@ class Logged:
     payload: bytes
     inner: int | None = None
     channel: object = None
+    system: object = None
     cut: ClassVar[bool] = False  # a log holds whole frames (a frame cut at the end is damage the reader states)
 
     def place(self, source: str) -> str:

@@ -12,6 +12,7 @@ lost is INCONCLUSIVE: its reply may be among them.
 
 from __future__ import annotations
 
+import bisect
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -23,6 +24,8 @@ from .wire import Parsed
 
 LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT, "INFO": Verdict.IMPL_DEFINED}
 STATE_CACHE = 1024  # request values whose reply states are kept resolved
+OPEN_LIMIT = 1024  # requests of one exchange followed at once (beyond, the oldest is left unjudged: a flood of
+# requests, or a log whose logging system falls silent while others ask on, leaving its clock standing)
 
 
 @dataclass
@@ -48,6 +51,7 @@ class _Open:
     terminal: Watched | None = None
     open_end: str | None = None  # the ambiguity id when its last state is one the seeds leave open
     orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
+    unsure: bool = False  # its first reply may have come after its bound (a log's clocks tell no closer)
 
 
 class PassiveExchanges:
@@ -94,7 +98,7 @@ class PassiveExchanges:
                 out += found or []
         for rule in () if answers else self.by_request.get(w.message, ()):
             if _matches(w.fields, rule.when) and not self._replying(w):
-                self._request(rule, w)
+                out += self._request(rule, w)
                 break
         return out
 
@@ -103,6 +107,11 @@ class PassiveExchanges:
         the same message), so it is no new request."""
         return any(_matches(w.fields, rule.reply_when) and (id(rule), w.dst, w.src) in self.pairs
                    for rule in self.by_reply.get(w.message, ()))
+
+    def due(self, now: float) -> list[Finding]:
+        """Judge every exchange whose bound has passed by ``now``: a clock that runs on frames no exchange watches
+        (a log's other traffic) decides what is due before anything later can split it."""
+        return self._expire(now) if now > self.next_deadline else []
 
     def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> None:
         """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
@@ -117,14 +126,7 @@ class PassiveExchanges:
         out, count = [], 0
         for queue in self.open.values():
             for o in queue:
-                if o.answered:
-                    found = [f for f in self._expired(o) if f.verdict is not Verdict.PASS]
-                else:
-                    found = [self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
-                                           f"no {o.rule.exchange['reply']} {self._between(o)} before {why}", o.request)]
-                for f in found:
-                    f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}" if o.answered \
-                        else f.detail
+                found = self._unjudged(o, why)
                 count += bool(found)
                 out += found
         for table in (self.open, self.ended):
@@ -133,6 +135,16 @@ class PassiveExchanges:
         self.keyed.clear()
         self.next_deadline = float("inf")
         return out, count
+
+    def _unjudged(self, o: _Open, why: str) -> list[Finding]:
+        """The findings on an exchange left open (``why``): INCONCLUSIVE, never PASS, never FAIL."""
+        if not o.answered:
+            return [self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
+                                  f"no {o.rule.exchange['reply']} {self._between(o)} before {why}", o.request)]
+        found = [f for f in self._expired(o) if f.verdict is not Verdict.PASS]
+        for f in found:
+            f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}"
+        return found
 
     def finish(self, end: float) -> list[Finding]:
         """Judge what the end of the capture decides; a request whose bound reaches past it is INCONCLUSIVE."""
@@ -143,22 +155,34 @@ class PassiveExchanges:
             elif not o.answered:
                 out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
                                          f"the capture ends {end - o.request.time:.3f} s after the request, before "
-                                         f"its bound of {o.deadline - o.request.time:g} s", o.request))
+                                         f"its bound of {o.rule.within:g} s", o.request))
         return out
 
     # ------------------------------------------------------------ requests
 
-    def _request(self, rule: _Rule, w: Watched) -> None:
+    def _request(self, rule: _Rule, w: Watched) -> list[Finding]:
+        """Follow a request; the findings on one left unjudged to make room for it (OPEN_LIMIT)."""
         key = tuple(hashable(w.fields.get(e["request_field"])) for e in rule.echoes)
         same_key = self.keyed.setdefault((id(rule), key), [])
         if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
                for o in same_key):
-            return  # a resend of an open request is the same exchange
-        o = _Open(rule, w, key, w.time + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
+            return []  # a resend of an open request is the same exchange
+        out, queue = [], self.open[id(rule)]
+        if len(queue) >= OPEN_LIMIT:
+            gone = queue.popleft()
+            if not gone.answered:
+                self.keyed[(id(rule), gone.key)].remove(gone)
+            out = self._unjudged(gone, f"{OPEN_LIMIT:,} later requests of its exchange were open at once (not "
+                                       "followed further)")
+        o = _Open(rule, w, key, _latest(w) + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
         self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
-        self.open[id(rule)].append(o)
+        if queue and queue[-1].deadline > o.deadline:  # a request timed by a bracket may end before an earlier one
+            queue.insert(bisect.bisect_right(queue, o.deadline, key=_deadline), o)
+        else:
+            queue.append(o)
         self.next_deadline = min(self.next_deadline, o.deadline)
+        return out
 
     # ------------------------------------------------------------ replies
 
@@ -183,9 +207,12 @@ class PassiveExchanges:
                 out.append(self._finding(o, "to-requester", Verdict.PASS if ok else LEVELS[c["level"]], c["clause"],
                                          "" if ok else f"{w.message} sent to system {show(w.dst)}, not to the "
                                                        f"requester {show(o.request.src)}", w))
-        if not o.answered:  # within the bound: a request is judged unanswered once its bound has passed
+        if not o.answered:  # not past the bound: a request is judged unanswered once its bound has surely passed
             o.answered = True
-            out.append(self._finding(o, "answered", Verdict.PASS, ex["clause"], "", w))
+            late = self._late(o, w)
+            o.unsure = bool(late)
+            out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE if late else Verdict.PASS, ex["clause"],
+                                     late and f"{ex['reply']} {late}", w))
         if o.states is not None:
             out += self._state(o, w)
         return out
@@ -206,7 +233,9 @@ class PassiveExchanges:
         kind = states.kind(value)
         if kind == "terminal" or kind == "open" or (kind == "unknown" and states.unknown is not None):
             o.terminal, o.open_end = w, (None if kind == "terminal" else states.open.get(hashable(value), states.unknown))
-            out.append(self._finding(o, "terminal", Verdict.PASS, states.clause, "", w))
+            late = self._late(o, w)
+            out.append(self._finding(o, "terminal", Verdict.INCONCLUSIVE if late else Verdict.PASS, states.clause,
+                                     late and f"terminal {self._said(w, states.field)} {late}", w))
         return out
 
     def _states(self, rule: _Rule, fields: dict) -> States:
@@ -255,7 +284,7 @@ class PassiveExchanges:
                 o = queue.popleft()
                 out += self._judge_expired(o)
             ended = self.ended[rid]
-            while ended and now - ended[0].deadline > ended[0].deadline - ended[0].request.time:
+            while ended and now - ended[0].deadline > ended[0].rule.within:
                 gone = ended.popleft()
                 self.keyed[(rid, gone.key)].remove(gone)
         self.next_deadline = min((q[0].deadline for q in self.open.values() if q), default=float("inf"))
@@ -263,8 +292,9 @@ class PassiveExchanges:
 
     def _judge_expired(self, o: _Open) -> list[Finding]:
         findings = self._expired(o)
-        why = next((why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
-                    and (systems is None or o.request.src in systems)), None)
+        why = "its first reply may have come after the bound (the log's clocks tell no closer)" if o.unsure else next(
+            (why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
+             and (systems is None or o.request.src in systems)), None)
         if why is not None:
             for f in findings:  # the reply, or the right one, may have been lost
                 if f.verdict in (Verdict.FAIL, Verdict.NON_STRICT):
@@ -272,7 +302,7 @@ class PassiveExchanges:
         return findings
 
     def _expired(self, o: _Open) -> list[Finding]:
-        ex, bound = o.rule.exchange, o.deadline - o.request.time
+        ex, bound = o.rule.exchange, o.rule.within
         if not o.answered:
             self.keyed[(id(o.rule), o.key)].remove(o)
             if o.orphans and o.rule.echoes:
@@ -331,6 +361,18 @@ class PassiveExchanges:
                              o.rule.exchange["clause"],
                              f"{what} ({'register entry' if should else 'open reading'} {ambiguity})", o.request)
 
+    def _late(self, o: _Open, w: Watched) -> str:
+        """Why ``w``, which came before the request's bound surely passed, may yet have come after it (its time and
+        the request's known only within brackets: frames of a log stamped by other clocks); "" if surely within."""
+        within = o.rule.within
+        if _latest(w) - o.request.time <= within:
+            return ""
+        early, late = max(0.0, w.time - _latest(o.request)), _latest(w) - o.request.time
+        at_most = f"to {late:.3f} s" if late < float("inf") else "s or more (the request came before the log's " \
+            "clock began)"
+        return (f"came {early:.3f} {at_most} after the request (bound {within:g} s): the log's clocks tell no closer, "
+                "not judged")
+
     # ------------------------------------------------------------ shared
 
     def _finding(self, o: _Open, aspect: str, verdict: Verdict, clause: str, detail: str, w: Watched) -> Finding:
@@ -361,6 +403,15 @@ class PassiveExchanges:
                      values(ex["reply"], ex.get("reply_when", {})),
                      [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex,
                      seconds(ex["within"], self.bounds) * scale)
+
+
+def _deadline(o: _Open) -> float:
+    return o.deadline
+
+
+def _latest(w: Watched) -> float:
+    """The latest time ``w`` can have been seen at."""
+    return w.time if w.latest is None else w.latest
 
 
 def _matches(fields: dict, when: dict[str, frozenset]) -> bool:

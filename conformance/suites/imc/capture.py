@@ -43,6 +43,7 @@ class ImcCaptureRules:
         self.fixed = {m.id: sum(f.size for f in m.fields) for m in defs.messages if all(f.is_scalar for f in m.fields)}
         self.watched: set[int] = set()
         self.seen: dict[bytes, dict] = {}  # decoded fields by payload, for the watched messages
+        self.named: dict[int, tuple[str, bool]] = {}  # message id -> (name, undefined): messages outside the suite
 
     def exchanges(self, edition: str, scale: float) -> PassiveExchanges:
         known = self.defs.by_abbrev  # a folder's own definitions may lack the messages of some exchanges
@@ -75,8 +76,10 @@ class ImcCaptureRules:
         if group is None:  # a message the suite does not cover: its framing is judged, not its fields
             if not sound or mgid == self.defs.null_id:
                 return self._decoded(p, UNIDENTIFIED)
-            name, undefined = outside(self.defs, mgid)
-            return Frame(None, outside=name, undefined=undefined)
+            named = self.named.get(mgid)
+            if named is None:
+                named = self.named[mgid] = outside(self.defs, mgid)
+            return Frame(None, outside=named[0], undefined=named[1])
         if not sound:
             return self._decoded(p, group)
         src, _, dst = ADDRESSING[order].unpack_from(p, 14)

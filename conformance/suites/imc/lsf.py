@@ -22,8 +22,8 @@ from . import codec
 from .crc16 import arc
 
 SYNCS = (b"\x54\xfe", b"\xfe\x54")
-HEAD = {b"\x54\xfe": struct.Struct("<HHHd"), b"\xfe\x54": struct.Struct(">HHHd")}  # sync, mgid, size, timestamp
-LOOK = HEAD[SYNCS[0]].size  # bytes a frame's place needs before its size and time can be read
+HEAD = {b"\x54\xfe": struct.Struct("<HHHdH"), b"\xfe\x54": struct.Struct(">HHHdH")}  # sync, mgid, size, timestamp, src
+LOOK = HEAD[SYNCS[0]].size  # bytes a frame's place needs before its size, time and sender can be read
 OVERHEAD = codec.HEADER_SIZE + codec.FOOTER_SIZE
 FRAME, MORE, CUT, NONE = "frame", "more", "cut", "none"  # what a place in a log holds (LsfReader._at)
 
@@ -53,9 +53,10 @@ class LsfReader:
     def units(self, pieces: Iterator[bytes], damage: list[str], name: str) -> Iterator[Logged]:
         buf, pos, base, number = b"", 0, 0, 0  # base: the log's byte at buf[0]
         skipped, ids = _Skipped(), self.ids
+        cut = False  # the bytes before the next frame are the rest of the one the stream's damage cut
         for piece in chain(pieces, (b"",)):  # then b"": the end of the log
-            if piece is GAP:  # what follows does not follow (damage the stream said): the frame it cuts is dropped
-                buf, base, pos = b"", base + len(buf), 0
+            if piece is GAP:  # what follows does not follow (damage the stream said): the frame it cuts is dropped,
+                buf, base, pos, cut = b"", base + len(buf), 0, True  # its rest too (the damage's line says so)
                 continue
             last = not piece
             buf, base, pos = buf[pos:] + piece, base + pos, 0
@@ -64,21 +65,23 @@ class LsfReader:
                 order = buf[pos:pos + 2]
                 head = HEAD.get(order)
                 if head is not None and n - pos >= LOOK:  # the common case: a frame of a message IMC.xml defines
-                    _, _, size, t = head.unpack_from(buf, pos)
+                    _, _, size, t, src = head.unpack_from(buf, pos)
                     end = pos + OVERHEAD + size
                     if end <= n and buf[pos + 2:pos + 4] in ids[order]:
                         number += 1
-                        yield Logged(number, t, base + pos, buf[pos:end])
-                        pos = end
+                        yield Logged(number, t, base + pos, buf[pos:end], None, None, src)  # positional: the hot path
+                        pos, cut = end, False
                         continue
                 what, end, t = self._at(buf, pos, n, last)
                 if what is FRAME:
                     number += 1
-                    yield Logged(number, t, base + pos, buf[pos:end])
-                    pos = end
+                    yield Logged(number, t, base + pos, buf[pos:end], system=HEAD[buf[pos:pos + 2]].unpack_from(
+                        buf, pos)[4])
+                    pos, cut = end, False
                 elif what is NONE:
                     found = self._next_frame(buf, pos, n, last)
-                    skipped.add(base + pos, found - pos)
+                    if not cut:
+                        skipped.add(base + pos, found - pos)
                     pos = found
                 else:
                     break  # MORE: the rest is in the next piece; CUT: the log ends inside this frame
@@ -101,7 +104,7 @@ class LsfReader:
             return NONE, 0, 0.0
         if n - pos < LOOK:
             return CUT, 0, 0.0
-        _, _, size, t = head.unpack_from(buf, pos)
+        _, _, size, t, _ = head.unpack_from(buf, pos)
         end = pos + OVERHEAD + size
         known = buf[pos + 2:pos + 4] in self.ids[order]
         if end > n:

@@ -1,7 +1,8 @@
 """A realistic IMC capture for the benchmark and the tests: a vehicle (id 30, UDP 6002) and a ground station
 (0x4CF0, UDP 6001) exchanging heartbeats, LBL ranges, acoustic operations and requests with their statuses,
 and Iridium transmissions with theirs; every frame with its own timestamp; a share of frames damaged (a bit
-flipped, the end cut, the size field changed) as a noisy link does."""
+flipped, the end cut, the size field changed) as a noisy link does. As the vehicle's log, the same conversation,
+optionally with a third system (a peer vehicle asking for its acoustic systems) and each system on its own clock."""
 
 from __future__ import annotations
 
@@ -13,12 +14,13 @@ from .codec import encode
 from .crc16 import crc16
 from .definitions import Definitions
 
-VEHICLE, STATION = 30, 0x4CF0
+VEHICLE, STATION, PEER = 30, 0x4CF0, 31
 HOSTS = {VEHICLE: ("10.0.0.30", 6002), STATION: ("10.0.0.1", 6001)}
 
 
-def conversation(wire, edition: str, k: int) -> list[tuple[int, int, str, dict]]:
-    """The frames (sender, addressee, message, fields with enumerations by name) of the k-th second."""
+def conversation(wire, edition: str, k: int, peer: bool = False) -> list[tuple[int, int, str, dict]]:
+    """The frames (sender, addressee, message, fields with enumerations by name) of the k-th second (with the peer's,
+    if ``peer``)."""
     r = lambda message, path, name: wire.resolve(message, path, name, edition)  # noqa: E731
     req = k % 65536
     out = [(VEHICLE, 0xFFFF, "Heartbeat", {})]
@@ -34,6 +36,9 @@ def conversation(wire, edition: str, k: int) -> list[tuple[int, int, str, dict]]
     out += [(VEHICLE, STATION, "AcousticStatus", {"req_id": req, "type": r("AcousticStatus", "type", "MSG"),
                                                   "status": r("AcousticStatus", "status", status), "info": "",
                                                   "range": 0.0}) for status in ("QUEUED", "SENT")]
+    if peer and k % 2 == 0:
+        out += [(PEER, 0xFFFF, "Heartbeat", {}), (PEER, VEHICLE, "AcousticSystemsQuery", {}),
+                (VEHICLE, PEER, "AcousticSystems", {"list": "b1,b2"})]
     if k % 4 == 0:
         out += [(STATION, VEHICLE, "IridiumMsgTx", {"req_id": req, "ttl": 600, "destination": "", "data": "cafe"})]
         out += [(VEHICLE, STATION, "IridiumTxStatus", {"req_id": req, "status": r("IridiumTxStatus", "status", s),
@@ -91,16 +96,20 @@ def _damage(rng: random.Random, frame: bytes) -> bytes:
     return bytes(out)
 
 
-def write_log(path, defs: Definitions, wire, edition: str, frames: int, start: float = 1.7e9) -> int:
-    """Write the same conversation as an LSF log (frames one after another, as DUNE's Logging task writes them);
-    the frames written."""
+def write_log(path, defs: Definitions, wire, edition: str, frames: int, start: float = 1.7e9,
+              clocks: dict[int, float] | None = None) -> int:
+    """Write the same conversation as an LSF log (frames one after another, as DUNE's Logging task writes them, in
+    the order they came); the frames written. ``clocks``: the systems whose clocks are off the vehicle's, with how
+    many seconds ahead each runs (behind: negative); the peer takes part if it is among them."""
     cache: dict = {}
     written = k = 0
+    clocks = clocks or {}
     with open(path, "wb") as out:
         while written < frames:
-            items = conversation(wire, edition, k)[:frames - written]
+            items = conversation(wire, edition, k, PEER in clocks)[:frames - written]
             for i, (src, dst, message, fields) in enumerate(items):
-                out.write(_frame(defs, cache, message, fields, src, dst, start + k + i / len(items)))
+                t = start + k + i / len(items) + clocks.get(src, 0.0)
+                out.write(_frame(defs, cache, message, fields, src, dst, t))
             written += len(items)
             k += 1
     return written

@@ -19,12 +19,16 @@ NOT_JUDGED_CLAUSE = "imc-wire#field-types"  # what a frame the reference codec d
 
 def outside(defs: Definitions, mgid: int) -> tuple[str, bool]:
     """(its name in reports, whether no definition names it) for a sound frame whose message id the definitions
-    lack: a vehicle's other traffic (an id IMC.xml defines: ``ids_elsewhere``), or an id no IMC.xml the suite has
-    defines (a newer protocol, a private message). Both are judged no further than their framing."""
+    lack: a vehicle's other traffic (an id IMC.xml defines: ``ids_elsewhere``, named as the whole IMC.xml in the
+    cache names it, else by its id), or an id no IMC.xml the suite has defines (a newer protocol, a private message).
+    Both are judged no further than their framing."""
     mdef = defs.by_id.get(mgid)
     if mdef is not None:
         return mdef.abbrev, False
-    return f"id {mgid}", mgid not in defs.ids_elsewhere
+    if mgid not in defs.ids_elsewhere:
+        return f"id {mgid}", True
+    whole = defined_elsewhere(mgid)
+    return (whole.abbrev if isinstance(whole, MessageDef) else f"id {mgid}"), False
 
 
 class ImcWire:
