@@ -57,6 +57,12 @@ def literal_prefix(glob: str) -> str:
     return glob[:cut]
 
 
+def glob_matches(case_id: str, glob: str, prefix: str) -> bool:
+    """``fnmatchcase(case_id, glob)`` for an id beginning with the glob's literal ``prefix``: a glob that is its prefix
+    and stars alone (``imc/LblRange/crc/*``, the usual kind) matches it without compiling a pattern."""
+    return glob.endswith("*") and not glob[len(prefix):].strip("*") or fnmatchcase(case_id, glob)
+
+
 class Waivers:
     """The waivers in force: by case id, and the broad ones (glob, rule, cause) in file order, the first that
     applies winning. ``stale()``: the broad waivers that named cases of the run but waived none. The broad ones are
@@ -84,7 +90,7 @@ class Waivers:
         """The broad waivers about this case, in file order (``about``: core.causes.about's key, e.g. ``rule:crc``;
         a cause key ends with what its cases are about)."""
         found = [i for size in self.prefix_sizes if size <= len(case_id)
-                 for i in self.globs.get(case_id[:size], ()) if fnmatchcase(case_id, self.broad[i].name)]
+                 for i in self.globs.get(case_id[:size], ()) if glob_matches(case_id, self.broad[i].name, case_id[:size])]
         found += self.named_by.get(("rule", rule), ()) if rule else ()
         found += self.named_by.get(("cause", about), ())
         return [self.broad[i] for i in sorted(found)]
@@ -165,7 +171,7 @@ def matches_any(glob: str, ordered: list[str]) -> bool:
     for i in range(bisect.bisect_left(ordered, prefix), len(ordered)):
         if not ordered[i].startswith(prefix):
             return False
-        if fnmatchcase(ordered[i], glob):
+        if glob_matches(ordered[i], glob, prefix):
             return True
     return False
 
