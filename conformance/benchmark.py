@@ -25,7 +25,9 @@ target with ``met`` or ``MISSED`` and the figure measured before the start-up wo
   one (the logs are written into a temporary folder and removed);
 - fuzzing (once each): generated messages against imcpy through hypothesis, the frame-mutation sweep against imcpy
   (beside imcpy's bare decode of such frames), the differential run of imcpy and pyimclsts (1,000 examples per
-  message, whole process) and the mutants of both suites.
+  message, whole process) and the mutants of both suites;
+- the reference node under a flood of HistoricSamples (``suites/imc/node/flood.py``): its slowest reply and its peak
+  memory.
 """
 
 from __future__ import annotations
@@ -91,6 +93,10 @@ TARGETS = (
      "whole list ratio", "x", 1.25, None),
     ("whole protocol: run --suite imc-full --adapter imcpy, time per case vs the seed suite's", "whole ratio", "x",
      2.0, None),
+    ("the reference node's slowest QUERY reply under 1,000,000 samples, whole process", "node flood reply 1000000", "s",
+     2.0, None),
+    ("the reference node's peak memory under 1,000,000 samples vs at rest, whole process", "node flood memory ratio",
+     "x", 1.5, None),
 )
 COUNTS: dict[str, int] = {}  # cases or frames of the rate rows, filled as they are measured
 
@@ -639,7 +645,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--json", metavar="FILE", help="also write every median and target as JSON")
-    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole"):
+    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole", "node-flood"):
         parser.add_argument(f"--skip-{part}", action="store_true")
     args = parser.parse_args(argv)
 
@@ -665,6 +671,9 @@ def main(argv: list[str] | None = None) -> int:
         medians |= fuzz_rows(suite, everything)
     if not args.skip_whole:
         medians |= whole_rows(args.repeat)
+    if not args.skip_node_flood:
+        from .suites.imc.node.flood import flood_rows
+        medians |= flood_rows()
     installed.cleanup()
     lines = target_lines(medians)
     print("\n".join(lines))
