@@ -264,3 +264,28 @@ def test_twenty_thousand_globs_load_and_apply_in_work_linear_in_their_number(cas
     made = set(globs)
     assert all(found[i] is not None for i in ids if i + "*" in made) and len(made) == len(globs)
     assert len(active) == 20_000
+
+
+@pytest.mark.parametrize("by", ["case", "cause"])
+def test_a_live_runs_finding_about_a_malformed_reply_is_waived_by_the_file_written_from_it(suite, cases, by):
+    """Against a node whose AcousticSystems replies are malformed, the finding is filed under AcousticSystems by the
+    AcousticSystemsQuery scenario that got it (virtual time: tests/live_harness.py)."""
+    from live_harness import EVERYTHING, scenario_cases, virtual_session
+
+    chosen = [c for c in scenario_cases(cases) if c.group == "AcousticSystemsQuery"]
+
+    def live(waivers=None):
+        session, link = virtual_session(suite, "imc-5.4.30", broken="malformed-reply")
+        return run_cases(session, suite, chosen, edition="imc-5.4.30", adapter="virtual", options=dict(EVERYTHING),
+                         clock=link.now, started="2026-01-01T00:00:00+00:00", waivers=waivers)
+
+    first = live()
+    finding = "imc/AcousticSystems/passive/AcousticSystemsQuery/scenario/reply"
+    assert {c.id: c.verdict for c in first.cases}[finding] is Verdict.FAIL and first.exit_code() == 1
+    data = {c.id: c.data for c in chosen}
+    doc, _ = waivers_document(first, "r") if by == "case" else cause_waivers_document(first, "r", data)
+    rules = set(suite.kinds["vector"].codec.rules)
+    active, _ = waivers_in_force(doc, {c.id for c in cases}, rules, subjects(cases), dt.date.today(), "w")
+    again = live(active)
+    assert {c.id: c.verdict for c in again.cases}[finding] is Verdict.WAIVED
+    assert again.exit_code() == 0 and not again.stale_waivers
