@@ -94,7 +94,7 @@ def command(args) -> int:
     from ..files import load_waivers
     from ..render.terminal import print_result
     from .adapters import adapter_choice, open_session
-    from .output import report_targets, say_untested, terminal, write_file, write_reports
+    from .output import report_targets, say_untested, terminal, write_reports
     from .provenance import provenance
 
     targets = report_targets(args)
