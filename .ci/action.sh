@@ -3,7 +3,8 @@
 #   action.sh install   a virtual environment at $IMC_VENV with the suite from $IMC_SOURCE (a folder or a wheel) and
 #                       the extras $IMC_EXTRAS (comma-separated: imcpy, pyimclsts, ros); its bin/ put on $GITHUB_PATH
 #   action.sh run       imc-conformance run with $IMC_ADAPTER_CMD or $IMC_ADAPTER, $IMC_SUITE, $IMC_WAIVERS and the
-#                       options in $IMC_ARGS (split on blanks, never by a shell); JSON, JUnit and HTML reports written
+#                       options in $IMC_ARGS (split on any whitespace, newlines included, never by a shell;
+#                       quotes and backslashes refused); JSON, JUnit and HTML reports written
 #                       to $IMC_JSON, $IMC_JUNIT, $IMC_HTML; the Markdown summary appended to $GITHUB_STEP_SUMMARY when
 #                       set; exits as the run did (0 pass, 1 a failure, 2 nothing could be judged) and writes that code
 #                       to $GITHUB_OUTPUT as exit-code.
@@ -26,7 +27,18 @@ run)
   if [ -n "${IMC_ADAPTER:-}" ]; then argv+=(--adapter "$IMC_ADAPTER"); fi
   if [ -n "${IMC_SUITE:-}" ]; then argv+=(--suite "$IMC_SUITE"); fi
   if [ -n "${IMC_WAIVERS:-}" ]; then argv+=(--waivers "$IMC_WAIVERS"); fi
-  if [ -n "${IMC_ARGS:-}" ]; then read -r -a extra <<< "$IMC_ARGS"; argv+=("${extra[@]}"); fi
+  if [ -n "${IMC_ARGS:-}" ]; then
+    case "$IMC_ARGS" in
+    *[\"\'\\]*)
+      echo "imc-conformance action: args are split on whitespace (blanks, tabs, newlines) and never by a shell, so" \
+           "quotes and backslashes cannot group them: give options whose values hold no blank, quote or backslash" >&2
+      if [ -n "${GITHUB_OUTPUT:-}" ]; then echo "exit-code=2" >> "$GITHUB_OUTPUT"; fi
+      exit 2
+      ;;
+    esac
+    IFS=$' \t\r\n' read -r -d '' -a extra <<< "$IMC_ARGS" || true  # every line of a YAML block, not the first alone
+    argv+=(${extra[@]+"${extra[@]}"})
+  fi
   argv+=(--json "${IMC_JSON:-conformance.json}" --junit "${IMC_JUNIT:-conformance-junit.xml}"
          --html "${IMC_HTML:-conformance.html}")
   summary=""

@@ -25,7 +25,9 @@ target with ``met`` or ``MISSED`` and the figure measured before the start-up wo
   one (the logs are written into a temporary folder and removed);
 - fuzzing (once each): generated messages against imcpy through hypothesis, the frame-mutation sweep against imcpy
   (beside imcpy's bare decode of such frames), the differential run of imcpy and pyimclsts (1,000 examples per
-  message, whole process) and the mutants of both suites.
+  message, whole process) and the mutants of both suites;
+- the reference node under a flood of HistoricSamples (``suites/imc/node/flood.py``): its slowest reply and its peak
+  memory.
 
 The rooms: ``measure`` (timing, the installed wheel, whole commands), ``targets``, one module per group of rows
 (``startup``, ``inprocess``, ``programs``, ``live``, ``recordings``, ``fuzzing``, ``whole``) and ``__main__``.

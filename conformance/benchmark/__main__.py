@@ -26,7 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--json", metavar="FILE", help="also write every median and target as JSON")
-    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole"):
+    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole", "node-flood"):
         parser.add_argument(f"--skip-{part}", action="store_true")
     args = parser.parse_args(argv)
 
@@ -52,6 +52,9 @@ def main(argv: list[str] | None = None) -> int:
         medians |= fuzz_rows(suite, everything)
     if not args.skip_whole:
         medians |= whole_rows(args.repeat)
+    if not args.skip_node_flood:
+        from ..suites.imc.node.flood import flood_rows
+        medians |= flood_rows()
     installed.cleanup()
     lines = target_lines(medians)
     print("\n".join(lines))

@@ -50,6 +50,10 @@ TARGETS = (
      "whole list ratio", "x", 1.25, None),
     ("whole protocol: run --suite imc-full --adapter imcpy, time per case vs the seed suite's", "whole ratio", "x",
      2.0, None),
+    ("the reference node's slowest QUERY reply under 1,000,000 samples, whole process", "node flood reply 1000000", "s",
+     2.0, None),
+    ("the reference node's peak memory under 1,000,000 samples vs at rest, whole process", "node flood memory ratio",
+     "x", 1.5, None),
 )
 
 

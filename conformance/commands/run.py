@@ -54,7 +54,7 @@ def add(sub) -> None:
 
 def selection(args, rerun: frozenset[str] | None = None):
     """The suite, the cases of its corpus that were read, the cases the options select (in the shard ``--shard``
-    names; only those of ``rerun`` when given) and how many the selection holds in all shards. Only the files of
+    names; only those of ``rerun`` when given) and those the selection holds in all shards. Only the files of
     the selected messages are read (``--message``, an id glob naming one, or the cases to rerun) unless the run
     needs the whole corpus (waivers name any case; the robustness phase replays every frame)."""
     from ..arguments import known_groups
@@ -69,7 +69,7 @@ def selection(args, rerun: frozenset[str] | None = None):
                          f"(editions: {', '.join(suite.editions)})")
     known_groups(suite, args.message, [g.name for g in suite.groups])
     chosen = select_cases(everything, args.edition, args.message, args.id, args.tag, ids=rerun)
-    return suite, everything, select_cases(chosen, args.edition, shard=args.shard), len(chosen)
+    return suite, everything, select_cases(chosen, args.edition, shard=args.shard), chosen
 
 
 def selected_groups(args, rerun: frozenset[str] | None = None) -> frozenset[str] | None:
@@ -91,12 +91,11 @@ def command(args) -> int:
     from .. import live
     from ..core.runner import run_cases
     from ..core.session import AdapterStartError
-    from ..core.verdicts import failing
     from ..core.waivers import WaiverError
     from ..files import load_waivers
     from ..render.terminal import print_result
     from .adapters import adapter_choice, open_session
-    from .output import report_targets, say_untested, terminal, write_file, write_reports
+    from .output import report_targets, say_untested, terminal, write_reports
     from .provenance import provenance
 
     targets = report_targets(args)
@@ -104,7 +103,8 @@ def command(args) -> int:
     if rerun is not None and not rerun:
         print(f"imc-conformance: every case of {printable(args.last_failed)} passed: nothing to run again")
         return 0
-    suite, everything, cases, total = selection(args, rerun)
+    suite, everything, cases, chosen_cases = selection(args, rerun)
+    total = len(chosen_cases)
     gc.freeze()  # the corpus stays loaded to the end: the collector need never walk it again
     try:
         options = live.options(args, suite, everything)
@@ -147,7 +147,8 @@ def command(args) -> int:
             result = run_cases(session, suite, cases, edition=args.edition, adapter=name, errata=args.errata,
                                waivers=waivers, strict=args.strict,
                                notes=rerun_notes(len(cases)) + notes + held_notes + live.notes(args, options),
-                               progress=progress, options=options, provenance=made, exitfirst=args.exitfirst)
+                               progress=progress, options=options, provenance=made, exitfirst=args.exitfirst,
+                               shard=args.shard, selection=chosen_cases if args.shard else None)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
     finally:
@@ -156,7 +157,6 @@ def command(args) -> int:
             # a run stopped at its first failure (--exitfirst) recorded only part of the exchange, as an interrupted one
             recorder.close(complete=result is not None and result.complete)
     if args.shard:
-        result.shard = args.shard
         result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's {total} "
                                "cases")
     print_result(result, console)
@@ -169,19 +169,31 @@ def command(args) -> int:
         console.print(f"pcapng of the exchange ({recorder.count} datagrams): {printable(str(args.pcap))}",
                       highlight=False, markup=False)
     if args.write_waivers:
-        from ..core.waivers import cause_waivers_document, waivers_document
-        reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
-        if getattr(args, "by", "case") == "cause":
-            doc = cause_waivers_document(result.cause_groups(), reason)
-        else:
-            doc = waivers_document([c.id for c in result.cases if failing(c.verdict, strict=False)], reason)
-        problems += write_file(Path(args.write_waivers), json.dumps(doc, indent=1) + "\n",
-                               f"waivers file ({counted(len(doc['waivers']), 'waiver')})", console)
+        problems += write_waivers(args, result, {c.id: c.data for c in cases}, console)
     if not result.complete and not result.stopped:
         print("imc-conformance: interrupted; the reports hold the cases done so far", file=sys.stderr)
         return result.exit_code()
     say_untested(result)
     return 2 if problems else result.exit_code()
+
+
+def write_waivers(args, result, data: dict[str, dict], console) -> int:
+    """``--write-waivers FILE``: the run's failures as a waivers file (``--by`` case or cause) the next run accepts,
+    with a line on what it leaves out; none for a run that judged nothing. 1 if it cannot be written, else 0."""
+    from ..core.waivers import cause_waivers_document, waivers_document
+    from .output import write_file
+
+    reason = f"failing on {dt.date.today().isoformat()} with {result.implementation}"
+    if getattr(args, "by", "case") == "cause":
+        doc, notes = cause_waivers_document(result, reason, data)
+    else:
+        doc, notes = waivers_document(result, reason)
+    for note in notes:
+        print(f"imc-conformance: --write-waivers: {printable(note)}", file=sys.stderr)
+    if result.nothing_tested() is not None:
+        return 0
+    return write_file(Path(args.write_waivers), json.dumps(doc, indent=1) + "\n",
+                      f"waivers file ({counted(len(doc['waivers']), 'waiver')})", console)
 
 
 def last_failed(args):

@@ -48,6 +48,26 @@ class Cause:
                 "errata": dict(self.errata), "verdicts": dict(self.verdicts)}
 
 
+# What a cause key of a judged case begins with (cause_of), and whether the operations that failed come next
+# ("fails/decode/valid") or what its cases are about does ("accepts/rule:crc")
+BEGINNINGS = {"accepts": False, "names-another-rule": False, "not-permitted": False, "should": True, "fails": True,
+              **{v.value.lower(): True for v in VERBS}}
+
+
+def key_problem(key: str, subjects: set[str]) -> str | None:
+    """Why ``key`` is not the cause key of a judged case (its beginning, its shape, or what it says its cases are
+    about, which must be one of ``subjects``), or None."""
+    parts = key.split("/")
+    if parts[0] not in BEGINNINGS:
+        return f"it begins with {parts[0]!r}, not one of {', '.join(sorted(BEGINNINGS))}"
+    shape = f"{parts[0]}/OPERATIONS/SUBJECT" if BEGINNINGS[parts[0]] else f"{parts[0]}/SUBJECT"
+    if len(parts) != (3 if BEGINNINGS[parts[0]] else 2) or not all(parts):
+        return f"a key beginning with {parts[0]!r} is {shape}"
+    if parts[-1] not in subjects:
+        return f"no case of this corpus is about {parts[-1]!r}"
+    return None
+
+
 def attended(verdict: Verdict) -> bool:
     """The verdicts a cause is looked for: every failing one (whatever --strict says) and NON_STRICT."""
     return failing(verdict, strict=False) or verdict is Verdict.NON_STRICT
@@ -71,7 +91,7 @@ def about(case, data: dict | None = None) -> tuple[str, str]:
 
 def subjects(cases) -> set[str]:
     """Every key ``about`` can give the corpus's cases (``cases``: core.cases.Case): what a cause key may end with."""
-    out = {"valid"}
+    out = {"valid", "family:passive"}  # what every case kind may file under another group (core.cases.passive_id)
     for case in cases:
         rule, named = case.data.get("rule"), case.data.get("class")
         if rule:

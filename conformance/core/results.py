@@ -177,7 +177,8 @@ class RunResult:
     def exit_code(self) -> int:
         """130 if interrupted (not stopped at its first failure); else 2 for an adapter error or protocol violation, or when nothing was tested
         (every case INCONCLUSIVE or UNSUPPORTED; a shard of no case tested all it was given); else 1 for a failing
-        verdict, a crash or gone incident or (under --strict) a check kind left untested; else 0."""
+        verdict, a crash or gone incident, (under --strict) a check kind left untested or a stale waiver (of a whole
+        run: in a shard, another shard may use it); else 0."""
         if not self.complete and not self.stopped:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
@@ -186,7 +187,7 @@ class RunResult:
         if self.nothing_tested() is not None:
             return 2
         if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested) or \
-                self.stale_waivers:
+                (self.stale_waivers and self.shard is None):  # a shard's: another shard may use it (the merge decides)
             return 1
         return 0
 

@@ -16,8 +16,8 @@ from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
 from .session import Answer, Job, Session
 from .suite import Suite
-from .verdicts import Verdict, failing, worst
-from .waivers import Waiver, Waivers, stale_note
+from .verdicts import UNTESTED, Verdict, failing, worst
+from .waivers import NEVER, Waiver, Waivers, stale_note, waivable
 
 
 PROGRESS_EVERY = 64  # answers between calls of a run's progress callback
@@ -27,7 +27,8 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
               errata: str | None = None, waivers: Waivers | None = None, strict: bool = False,
               notes: list[str] | None = None, progress: Callable[[int], None] | None = None,
               options: dict | None = None, clock: Callable[[], float] = time.perf_counter,
-              started: str | None = None, provenance: Provenance | None = None, exitfirst: bool = False) -> RunResult:
+              started: str | None = None, provenance: Provenance | None = None, exitfirst: bool = False,
+              shard: tuple[int, int] | None = None, selection: list[Case] | None = None) -> RunResult:
     """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far, every
     ``PROGRESS_EVERY`` answers and at the end).
 
@@ -45,6 +46,10 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     ``exitfirst``: the run stops once a case is done and fails (its verdict, or a finding it filed elsewhere): the
     result holds the cases done by then, with a note naming that case.
 
+    ``shard``: (K, N) of a run of one shard of ``selection`` (every case of the run's selection): a broad waiver
+    naming cases of the selection that waives none of the shard's is noted, and left to the merge of the shards
+    (another shard may use it; the merge finds it stale when no shard does).
+
     The cyclic garbage collector is paused while the run lasts: a run makes little cyclic garbage, and each full
     collection would walk the whole loaded corpus again.
     """
@@ -52,14 +57,14 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     gc.disable()
     try:
         return _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-                    started, provenance, exitfirst)
+                    started, provenance, exitfirst, shard, selection)
     finally:
         if collecting:
             gc.enable()
 
 
 def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-         started, provenance, exitfirst) -> RunResult:
+         started, provenance, exitfirst, shard, selection) -> RunResult:
     started = started or dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = clock()
     hello = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
@@ -96,7 +101,7 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         answered.append(job.case_id)
         if left is not None:
             left[job.case_id] -= 1
-            if not left[job.case_id] and _fails(job.case_id, data, edition, found, waivers, strict):
+            if not left[job.case_id] and _fails(name, job.case_id, data, edition, found, waivers, strict):
                 stopped_at.append(job.case_id)
 
     complete = True
@@ -125,6 +130,9 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         notes.insert(0, (f"stopped at the first failing case, {stopped_at[0]}" if complete else "interrupted")
                      + f": {len(cases)} of {len(plans)} cases were done; the others are not in this result")
     untested, why = hello_gaps(suite, cases, edition, emits, plans)
+    if waivers and cases and all(worst({r.verdict for r in judges[c.id][2]}) in (*UNTESTED, *NEVER) for c in cases):
+        waivers = Waivers()  # nothing judged: no failure to waive (the run says why nothing could be tested)
+        notes.append("no waiver applies: the run judged nothing")
     notes += why + list(getattr(session, "notes", ()))
     filed: dict[str, list[CaseResult]] = defaultdict(list)
     for case in cases:
@@ -134,27 +142,33 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         if case.id not in timelines and len(checks) > 1:
             checks = sorted(checks, key=_check_name)
         data = case.data
-        verdict, waiver = _waived(case.id, data, edition, checks, waivers)
+        passive = findings_elsewhere(elsewhere, groups) if elsewhere else {}
+        covered = case.id in waivers.by_id and any(failing(worst({r.verdict for r in found}), True)
+                                                   for found in passive.values())
+        verdict, waiver = _waived(case.id, data, edition, checks, waivers, covered)
         explained = (suite.implementation_errata(case.id, errata, case.data.get("tags", ()))
                      if failing(verdict, strict=False) else [])
         filed[case.group].append(CaseResult(case.id, case.group, verdict, expectation(data, edition),
                                             data["clause"], checks, data.get("rule"), explained,
                                             waiver.reason if waiver else None, timelines.get(case.id, [])))
-        for group, passive in (findings_elsewhere(elsewhere, groups).items() if elsewhere else ()):
-            filed[group].append(CaseResult(passive_id(name, group, case.id), group, worst(r.verdict for r in passive),
-                                           None, passive[0].clause or "", passive))
+        for group, found in passive.items():
+            filed[group].append(finding(passive_id(name, group, case.id), group, found, waivers))
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
                 for g in suite.groups if g.name in filed]
     data = {case.id: case.data for case in cases}
     causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)))
-    stale = [w.selector for w in waivers.stale()] if complete and not stopped_at else []
-    notes += [stale_note(s) for s in stale]
+    stale = []
+    if complete and not stopped_at:
+        unused = waivers.stale() if shard is None or selection is None else \
+            unused_naming(waivers, admitted(suite, selection, hello["kinds"], options)[0], edition)
+        stale = [w.selector for w in unused]
+    notes += [stale_note(s, shard) for s in stale]
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,
                      round(clock() - began, 3), messages, session.stderr, notes, complete and not stopped_at,
                      list(session.incidents), untested, causes=causes,
                      provenance=replace(provenance, errata=errata) if provenance is not None else None,
                      stale_waivers=stale,
-                     stopped=complete and bool(stopped_at))
+                     stopped=complete and bool(stopped_at), shard=shard)
 
 
 def case_verdict(checks: list[CheckResult], waiver: Waiver | None) -> Verdict:
@@ -165,25 +179,54 @@ def case_verdict(checks: list[CheckResult], waiver: Waiver | None) -> Verdict:
     return verdict
 
 
-def _waived(case_id: str, data: dict, edition: str, checks: list[CheckResult],
-            waivers: Waivers) -> tuple[Verdict, Waiver | None]:
+def _waived(case_id: str, data: dict, edition: str, checks: list[CheckResult], waivers: Waivers,
+            covered: bool = False) -> tuple[Verdict, Waiver | None]:
     """A case's verdict and the waiver that applies to it: its id's, or the first glob, rule or cause waiver naming
-    it that covers its failure (the cause its checks give, as the report groups it)."""
+    it that covers its failure (the cause its checks give, as the report groups it); never for an ADAPTER_ERROR.
+    ``covered``: its id waiver covers a failing finding it filed under another group (so it is not stale if the case
+    itself passes)."""
     verdict = case_verdict(checks, None)
-    if not waivers:
+    if not waivers or not waivable(verdict):
         return verdict, None
     unwaived = CaseResult(case_id, "", verdict, expectation(data, edition), "", checks, data.get("rule"))
     cause = cause_of(unwaived, data) if failing(verdict, strict=True) else None
     waiver = waivers.find(case_id, data.get("rule"), about(unwaived, data)[0], cause and cause[0])
-    return (verdict, None) if waiver is None else (case_verdict(checks, waiver), waiver)
+    if waiver is None or (covered and cause is None):
+        return verdict, None
+    return case_verdict(checks, waiver), waiver
 
 
-def _fails(case_id: str, data: dict, edition: str, found: list[CheckResult], waivers: Waivers, strict: bool) -> bool:
+def unused_naming(waivers: Waivers, cases: list[Case], edition: str) -> list[Waiver]:
+    """The broad waivers naming any of ``cases`` (a shard's whole selection) that waived nothing in this run."""
+    named = set()
+    for c in cases:
+        plain = CaseResult(c.id, c.group, Verdict.PASS, expectation(c.data, edition), "", [], c.data.get("rule"))
+        named.update(waivers.naming(c.id, c.data.get("rule"), about(plain, c.data)[0]))
+    return [w for w in waivers.broad if w in named and w not in waivers.used]
+
+
+def finding(case_id: str, group: str, checks: list[CheckResult], waivers: Waivers) -> CaseResult:
+    """What a case found about another group, as a case of that group: WAIVED when failing and a waiver covers it
+    (the id waiver of the case that made it, a glob matching its id, its cause)."""
+    verdict = worst({r.verdict for r in checks})
+    out = CaseResult(case_id, group, verdict, None, checks[0].clause or "", checks)
+    if waivers and failing(verdict, strict=True) and waivable(verdict):
+        waiver = waivers.find(case_id, None, about(out)[0], cause_of(out)[0])
+        if waiver is not None:
+            out.verdict, out.waiver = Verdict.WAIVED, waiver.reason
+    return out
+
+
+def _fails(suite: str, case_id: str, data: dict, edition: str, found: list[CheckResult], waivers: Waivers,
+           strict: bool) -> bool:
     """Whether a case that is done fails: by its own checks (as its waiver has them), or by a finding it filed under
-    another group (a case of its own in the result)."""
-    own = [r for r in found if r.filed_under is None]
+    another group (a case of its own in the result, as its waiver has it)."""
+    own, elsewhere = [], defaultdict(list)
+    for r in found:
+        (own if r.filed_under is None else elsewhere[r.filed_under]).append(r)
     return (bool(own) and failing(_waived(case_id, data, edition, own, waivers)[0], strict)) or any(
-        failing(r.verdict, strict) for r in found if r.filed_under is not None)
+        failing(finding(passive_id(suite, group, case_id), group, checks, waivers).verdict, strict)
+        for group, checks in elsewhere.items())
 
 
 def _check_name(result: CheckResult) -> str:

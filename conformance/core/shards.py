@@ -54,7 +54,7 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
         ordered = sorted(cases[name], key=lambda c: (case_order.get(c.id, len(case_order)), c.id))
         messages.append(MessageResult(name, keys[name], message_verdict(ordered, first.strict), ordered))
     stale = sorted(set(results[0].stale_waivers).intersection(*(r.stale_waivers for r in results)))
-    shard_stale = {stale_note(s) for r in results for s in r.stale_waivers}  # a waiver one shard used is not stale
+    shard_stale = {stale_note(s, r.shard) for r in results for s in r.stale_waivers}  # stale in every shard, or not
     notes = list(dict.fromkeys(n for r in results for n in r.notes if n not in shard_stale))
     notes.insert(0, f"the {n} shards of the run merged")
     notes += [stale_note(s) for s in stale]

@@ -82,6 +82,15 @@ def attention(result: RunResult) -> list[CaseResult]:
     return [c for c in result.cases if c.verdict in ATTENTION]
 
 
+def waived(result: RunResult) -> list[tuple[str, list[str]]]:
+    """The WAIVED cases grouped by their waiver's reason (first seen first): (reason, case ids in run order)."""
+    out: dict[str, list[str]] = {}
+    for c in result.cases:
+        if c.verdict is Verdict.WAIVED:
+            out.setdefault(c.waiver or "", []).append(c.id)
+    return list(out.items())
+
+
 def errata_text(cause: Cause) -> str:
     """The errata explaining a group's cases, with how many each ("P1 828, P2 298"), or ""."""
     return ", ".join(f"{e} {n}" for e, n in cause.errata)

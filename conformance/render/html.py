@@ -18,7 +18,7 @@ from ..core.verdicts import Verdict
 from ..core.results import FORMAT, CaseResult, RunResult
 from ..escaping import clean
 from .common import (TIMELINE_LIMIT, attention, cause_numbers, decided_at, errata_text, incident_lines, overall,
-                     provenance_lines, verdict_columns)
+                     provenance_lines, verdict_columns, waived)
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 MAX_DETAILED = 200  # failing cases shown in full
@@ -63,7 +63,8 @@ def render_html(result: RunResult) -> str:
         result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown, causes=causes,
         incidents=incident_lines(result), provenance=provenance_lines(result), format=FORMAT,
         failing_total=len(failing), first_failure=first, group_tone=GROUP_TONE, stderr=stderr[:MAX_STDERR],
-        stderr_cut=max(0, len(stderr) - MAX_STDERR), timelines=others)
+        stderr_cut=max(0, len(stderr) - MAX_STDERR), timelines=others,
+        waived=[{"reason": r, "cases": ids[:MAX_CAUSE_CASES], "total": len(ids)} for r, ids in waived(result)])
 
 
 def timeline_view(case: CaseResult) -> dict:

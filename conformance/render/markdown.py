@@ -8,7 +8,8 @@ from ..core.verdicts import Verdict
 from ..core.results import RunResult
 from ..escaping import clean
 from ..wording import counted
-from .common import TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines, verdict_columns
+from .common import (TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines,
+                     verdict_columns, waived)
 
 EMOJI = {
     Verdict.PASS: "✅", Verdict.FAIL: "❌", Verdict.NON_STRICT: "⚠️", Verdict.IMPL_DEFINED: "ℹ️",
@@ -81,7 +82,21 @@ def render_markdown(result: RunResult) -> str:
             lines += [f"| {e['t']:.3f} | {cell(e['event'])} | {cell(e.get('step', ''))} | {cell(e.get('message', ''))} | "
                       f"{cell(e.get('note', ''), MAX_DETAIL)} |" for e in c.timeline[:TIMELINE_LIMIT]]
             lines += ["", "</details>"]
+    lines += waiver_table(result)
     return "\n".join(lines) + "\n"
+
+
+def waiver_table(result: RunResult) -> list[str]:
+    """The waived cases by their waiver's reason (folded); nothing if none."""
+    reasons = waived(result)
+    if not reasons:
+        return []
+    lines = ["", f"<details><summary>{counted(sum(len(ids) for _, ids in reasons), 'waived case')}, "
+             f"{counted(len(reasons), 'reason')}</summary>", "", "| Waiver's reason | Cases | First case |", "|---|--:|---|"]
+    lines += [f"| {cell(reason, MAX_DETAIL)} | {len(ids)} | <code>{cell(ids[0])}</code> |" for reason, ids in reasons[:MAX_CAUSES]]
+    if len(reasons) > MAX_CAUSES:
+        lines += ["", f"and {len(reasons) - MAX_CAUSES} more reasons (see the full report)."]
+    return lines + ["", "</details>"]
 
 
 def cause_table(result: RunResult) -> list[str]:

@@ -15,7 +15,7 @@ from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
 from ..escaping import printable
 from ..wording import counted
-from .common import cause_line, incident_lines, provenance_lines, timeline_lines
+from .common import cause_line, incident_lines, provenance_lines, timeline_lines, waived
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)
 SHOWN_FAILURES = 20
@@ -81,6 +81,12 @@ def print_result(result: RunResult, console: Console) -> None:
         console.print(f"… and {len(noted) - SHOWN_FAILURES} more groups of non-strict or inconclusive cases")
     if len(shown) > SHOWN_FAILURES:
         console.print(f"… and {len(shown) - SHOWN_FAILURES} more failing cases (see --json/--html reports)")
+    reasons = waived(result)
+    for reason, ids in reasons[:SHOWN_FAILURES]:
+        which = safe(ids[0]) if len(ids) == 1 else f"{len(ids)} cases ({safe(', '.join(ids[:3]))}{', …' if len(ids) > 3 else ''})"
+        console.print(f"[dim]WAIVED[/] {which}: waiver: {safe(reason[:300])}")
+    if len(reasons) > SHOWN_FAILURES:
+        console.print(f"… and {len(reasons) - SHOWN_FAILURES} more waivers' reasons (see --json/--html reports)")
     for line in incident_lines(result):
         console.print(f"[red]incident:[/] {safe(line[:600])}")
     for note in result.notes:

@@ -1,10 +1,23 @@
 """The reference node's store for the disruption tolerant network: the samples and RemoteCommands it keeps, the
-HistoricDataQuery that reads or clears them, and the RemoteCommands it executes or forwards."""
+HistoricDataQuery that reads or clears them, and the RemoteCommands it executes or forwards.
+
+The store is bounded: a reply holds at most 65,535 bytes (max_size is a uint16), no more than ``KEPT_MAX`` of the
+smallest items, so the node keeps the ``KEPT_MAX`` items a reply would send first (highest priority, then earliest)
+and drops the rest (trimmed when ``KEPT_SLACK`` more have come, so a flood costs little per datagram). A reply is
+built in one pass: each item measured once, taken in order while the HistoricData fits max_size and a datagram.
+"""
 
 from __future__ import annotations
 
+from .. import codec
 from ....kinds.vector.floats import as_float
 from .framing import PROCESSING, UNKNOWN_ENTITY
+
+KEPT_MAX = 8192  # items kept: more than 65,535 bytes of the smallest (15 bytes: a HistoricSample holding no sample)
+KEPT_SLACK = 2048  # items beyond KEPT_MAX that may come before the store is trimmed back to it
+DATAGRAM = 65_507  # the largest UDP payload over IPv4
+REPLY_OTHER = codec.HEADER_SIZE + 2 + 5  # bytes of a HistoricDataQuery reply besides its data: header, CRC, req_id,
+# type and max_size
 
 
 class History:
@@ -41,14 +54,27 @@ class History:
                          or as_float(m["fields"]["timeout"]) > self.epoch0 + t]
         items = list(self.kept)
         if self.broken != "transmits-in-arrival-order":
-            items.sort(key=lambda m: -m["fields"].get("priority", 0))
-        while True:
-            data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": items}}
-            if self.broken == "ignores-max-size" or self.wire.size_of("HistoricDataQuery", "data", data) <= max_size:
-                return data if items or self.broken == "ignores-max-size" else None
-            if not items or self.broken == "empty-when-small":
-                return None
-            items = items[:-1]
+            items.sort(key=_priority)
+        data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": []}}
+        room = DATAGRAM - REPLY_OTHER if self.broken == "ignores-max-size" else min(max_size, DATAGRAM - REPLY_OTHER)
+        size = self.wire.size_of("HistoricDataQuery", "data", data)
+        if size > room:
+            return None
+        taken = data["fields"]["data"]
+        for item in items:
+            size += self.wire.size_of("HistoricData", "data", [item]) - 2  # an item of a message list: 2 bytes of count
+            if size > room or (self.broken != "ignores-max-size" and size > max_size):
+                if self.broken == "empty-when-small":
+                    return None
+                break
+            taken.append(item)
+        return data if taken or self.broken == "ignores-max-size" else None
+
+    def _trim_kept(self) -> None:
+        """Back to the ``KEPT_MAX`` items a reply sends first, once ``KEPT_SLACK`` more have come (arrival order kept)."""
+        if len(self.kept) > KEPT_MAX + KEPT_SLACK:
+            first = sorted(range(len(self.kept)), key=lambda i: _priority(self.kept[i]))[:KEPT_MAX]
+            self.kept = [self.kept[i] for i in sorted(first)]
 
     def _on_HistoricData(self, t: float, message: dict) -> None:
         """Data for the disruption tolerant network: samples are kept for transmission (those of priority -127
@@ -63,6 +89,7 @@ class History:
                 self.kept.append(item)
             elif item["abbrev"] == "RemoteCommand":
                 self._on_RemoteCommand(t, dict(message, abbrev="RemoteCommand", fields=item["fields"]))
+        self._trim_kept()
 
     def _on_CompressedHistory(self, t: float, message: dict) -> None:
         """Not read (a reading the seeds leave open: compressed-history-input); the broken node stops serving."""
@@ -77,6 +104,7 @@ class History:
                 return
         if as_float(f["timeout"]) > self.epoch0 + t or self.broken == "keeps-expired-commands":
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
+            self._trim_kept()
             self._forward(t)
         elif self.broken == "forwards-expired" and f["destination"] in self.contacts:
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
@@ -104,3 +132,8 @@ class History:
         header = {"timestamp": self.epoch0 + t, "src": command["original_source"], "src_ent": UNKNOWN_ENTITY,
                   "dst": self.system, "dst_ent": UNKNOWN_ENTITY}
         handler(t, {"abbrev": command["cmd"]["abbrev"], "header": header, "fields": command["cmd"]["fields"], "executed": True})
+
+
+def _priority(item: dict) -> int:
+    """The sort key of a kept item: highest priority first (a RemoteCommand has none: 0)."""
+    return -item["fields"].get("priority", 0)
