@@ -1,5 +1,5 @@
 """A vehicle's LSF log holding three systems' frames, each stamped by its own clock: the vehicle's (id 30), a ground
-station's running 42 s late (0x4CF0) and a peer vehicle's running 12 s early (31), in the order they came, with the
+station's running 42 s late (system 19696) and a peer vehicle's running 12 s early (31), in the order they came, with the
 station's acoustic and Iridium requests, the peer's queries and the vehicle's replies. Usage: python skewed_log.py
 OUT.lsf [FRAMES]"""
 import sys
