@@ -46,6 +46,9 @@ class Acoustic:
             state(PROCESSING, "MSG_FAILURE" if self.broken == "unsupported-as-failure" else "UNSUPPORTED")
         if op not in plans:
             return  # a state (sent by another node), not a request
+        if self.broken == "dies-on-empty-msg" and op in ("MSG", "MSG_SHORT") and f["msg"] is None:
+            self.acoustic_dead = True  # as DUNE's CommManager, which dereferences the missing message
+            return
         distance = self.peers.get(text_of(f["system"]))
         if distance is None and self.variant == "silent-to-unknown-systems":
             return  # it cannot route the request

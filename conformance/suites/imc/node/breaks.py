@@ -74,6 +74,8 @@ BREAKS = {
     "succeeds-to-unknown": "an AcousticRequest to a destination it does not know ends in SENT (a SHOULD)",
     "dies-on-compressed-history": "after a CompressedHistory, no request is served",
     "repeat-range-drops-both": "a RANGE AcousticOperation to a system a RANGE is under way to drops both: neither ends",
+    "forwards-expired-stored": "a RemoteCommand kept for a recipient not on the link is forwarded when the recipient appears, even after its timeout passed (as DUNE's DataStore, which checks a timeout only on arrival)",
+    "dies-on-empty-msg": "after an AcousticOperation MSG or MSG_SHORT with no message (unanswered), acoustic requests go unanswered (the heartbeat goes on)",
     "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 

@@ -84,11 +84,16 @@ class History:
 
     def _forward(self, t: float) -> None:
         """Resend the kept RemoteCommands whose recipient is a contact (as DUNE does over Wi-Fi, inside
-        HistoricData); the others stay kept for a QUERY's reply."""
+        HistoricData), when a command comes and when its recipient appears; the others stay kept for a QUERY's
+        reply. A command whose timeout passed while it was kept is not resent (forwards-expired-stored: it is, as
+        DUNE's DataStore checks a command's timeout only on arrival)."""
         if self.broken == "never-forwards":
             return
         for command in [c for c in self.kept if c["abbrev"] == "RemoteCommand" and c["fields"]["destination"] in self.contacts]:
             self.kept.remove(command)
+            if as_float(command["fields"]["timeout"]) <= self.epoch0 + t and self.broken not in (
+                    "forwards-expired", "keeps-expired-commands", "forwards-expired-stored"):
+                continue  # expired while kept: no more attempts
             destination = command["fields"]["destination"]
             if self.broken == "forwards-as-own":
                 command = {**command, "fields": {**command["fields"], "original_source": self.system}}

@@ -201,6 +201,7 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
                 if self.variant == "vehicle-traffic" and self.next_traffic is None:
                     self.next_traffic = t
                 self.next_announce = t + period if self.next_announce is None else self.next_announce
+                self._forward(t)  # the kept commands for a system that has just appeared
             return
 
     def _announce(self, t: float) -> bytes:
