@@ -114,8 +114,8 @@ class ImcPeer:
         if parsed.decoded is None:
             return True
         header = parsed.decoded["header"]
-        ours = (self.system, self.other, self.late)
-        return header["src"] not in ours and header["dst"] in ours + (0xFFFF, 0)
+        ours = (self.system, self.other) + ((self.late,) if self.appeared else ())
+        return header["src"] not in ours + (self.late,) and header["dst"] in ours + (0xFFFF, 0)
 
     def own(self, parsed) -> bool:
         return parsed.decoded is not None and parsed.decoded["header"]["src"] in (self.system, self.other, self.late)
