@@ -76,6 +76,7 @@ BREAKS = {
     "repeat-range-drops-both": "a RANGE AcousticOperation to a system a RANGE is under way to drops both: neither ends",
     "forwards-expired-stored": "a RemoteCommand kept for a recipient not on the link is forwarded when the recipient appears, even after its timeout passed (as DUNE's DataStore, which checks a timeout only on arrival)",
     "dies-on-empty-msg": "after an AcousticOperation MSG or MSG_SHORT with no message (unanswered), acoustic requests go unanswered (the heartbeat goes on)",
+    "transmits-newest-first": "historic samples are transmitted newest first, whatever their priority",
     "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 

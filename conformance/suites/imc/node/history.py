@@ -40,7 +40,9 @@ class History:
             self.kept = [m for m in self.kept if m["abbrev"] != "RemoteCommand"
                          or as_float(m["fields"]["timeout"]) > self.epoch0 + t]
         items = list(self.kept)
-        if self.broken != "transmits-in-arrival-order":
+        if self.broken == "transmits-newest-first":
+            items.reverse()
+        elif self.broken != "transmits-in-arrival-order":
             items.sort(key=lambda m: -m["fields"].get("priority", 0))
         while True:
             data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": items}}
