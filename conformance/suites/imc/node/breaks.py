@@ -77,6 +77,7 @@ BREAKS = {
     "forwards-expired-stored": "a RemoteCommand kept for a recipient not on the link is forwarded when the recipient appears, even after its timeout passed (as DUNE's DataStore, which checks a timeout only on arrival)",
     "dies-on-empty-msg": "after an AcousticOperation MSG or MSG_SHORT with no message (unanswered), acoustic requests go unanswered (the heartbeat goes on)",
     "transmits-newest-first": "historic samples are transmitted newest first, whatever their priority",
+    "late-success": "with its gateway slow, an Iridium message reported EXPIRED at its time to live is reported OK once the gateway answers, long after it",
     "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 
