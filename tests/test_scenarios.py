@@ -79,6 +79,7 @@ CAUGHT = {
     "dies-on-empty-msg": ("imc/AcousticOperation/scenario/msg-without-message-then-served", "FAIL"),
     "transmits-newest-first": ("imc/HistoricDataQuery/scenario/sample-order-rounds", "FAIL"),
     "late-success": ("imc/IridiumMsgTx/scenario/gateway-slow-then-back", "FAIL"),
+    "no-lbl-ranges": ("imc/LblConfig/scenario/ranges-after-set", "NON_STRICT"),
     "empty-when-small": ("imc/HistoricDataQuery/scenario/sample-order", "NON_STRICT"),
     "clear-keeps-data": ("imc/HistoricDataQuery/scenario/clear-empties", "NON_STRICT"),
     "ok-when-gateway-fails": ("imc/IridiumMsgTx/scenario/gateway-fails", "NON_STRICT"),
@@ -421,7 +422,7 @@ def test_what_the_exchanges_name_exists(suite, cases):
 
 def test_a_step_may_not_cover_an_unknown_or_untestable_statement(suite, cases):
     case = next(c.data for c in cases if c.id == "imc/LblConfig/scenario/get-cfg")
-    for sid, why in (("LblConfig.nothing", "not a statement"), ("LblRange.notify", "marked untestable")):
+    for sid, why in (("LblConfig.nothing", "not a statement"), ("AcousticLink.report", "marked untestable")):
         broken = dict(case, steps=[dict(case["steps"][0]), dict(case["steps"][1], covers=[sid])])
         problem = suite.live_problem("scenario", broken)
         assert problem is not None and problem[0] == ".steps[1].covers[0]" and why in problem[1]
@@ -593,3 +594,15 @@ def test_a_counting_step_takes_only_what_its_only_holds_and_names_real_fields(su
     found = next(c for c in result.cases if c.id == case["id"])
     assert found.verdict is Verdict.PASS
     assert any(e.get("note") == "not what the step counts (its only)" for e in found.timeline)
+
+
+def test_a_capability_judged_only_where_claimed_is_unsupported_without_claims(suite, cases):
+    """LBL navigation (lbl-ranges): a node that does not navigate with LBL sends no LblRange, so without a claims file
+    its scenario is not claimed (UNSUPPORTED), never a failure; claimed, a node that sends none is caught."""
+    chosen = [c for c in cases if c.id == "imc/LblConfig/scenario/ranges-after-set"]
+    options = {k: v for k, v in EVERYTHING.items() if k != "claims"}
+    unclaimed, _ = run_virtual(suite, chosen, options=options, broken="no-lbl-ranges")
+    case = next(c for c in unclaimed.cases if c.id == chosen[0].id)
+    assert case.verdict is Verdict.UNSUPPORTED and "judged only where --claims claims it" in case.detail
+    claimed, _ = run_virtual(suite, chosen, broken="no-lbl-ranges")
+    assert verdicts(claimed)[chosen[0].id] == "NON_STRICT"

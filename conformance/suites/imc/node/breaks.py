@@ -78,6 +78,7 @@ BREAKS = {
     "dies-on-empty-msg": "after an AcousticOperation MSG or MSG_SHORT with no message (unanswered), acoustic requests go unanswered (the heartbeat goes on)",
     "transmits-newest-first": "historic samples are transmitted newest first, whatever their priority",
     "late-success": "with its gateway slow, an Iridium message reported EXPIRED at its time to live is reported OK once the gateway answers, long after it",
+    "no-lbl-ranges": "with beacons set and an acoustic peer, it never reports an LblRange (a SHOULD; judged only where claimed)",
     "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 
