@@ -79,6 +79,7 @@ BREAKS = {
     "transmits-newest-first": "historic samples are transmitted newest first, whatever their priority",
     "late-success": "with its gateway slow, an Iridium message reported EXPIRED at its time to live is reported OK once the gateway answers, long after it",
     "no-lbl-ranges": "with beacons set and an acoustic peer, it never reports an LblRange (a SHOULD; judged only where claimed)",
+    "restarts-on-empty-msg": "an AcousticOperation MSG or MSG_SHORT with no message restarts its acoustic service: a RANGE under way never ends (as DUNE's CommManager, which dies on it and is restarted)",
     "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 
