@@ -41,6 +41,8 @@ READINGS = {  # case -> the open reading (ambiguities.json) DUNE takes: IMPL_DEF
     "imc/LblConfig/scenario/unannounced-sender": "unannounced-sender",  # UDP/Listener.hpp:146-153: only announced contacts
     "imc/HistoricDataQuery/scenario/clear-after-handed": "clear-scope",  # DataStore/Task.cpp:363-410: per requester
     "imc/LblConfig/scenario/out-of-range-beacon": "out-of-range-beacon",  # the beacon at 2.0 rad kept as set
+    "imc/HistoricDataQuery/scenario/query-empty-store": "empty-store-reply",  # DataStore/Task.cpp:373-380: no data set
+    "imc/AcousticOperation/scenario/msg-to-unreachable-end": "msg-to-unreachable",  # MSG_FAILURE
 }
 UNMET = {  # case -> the register entry (level SHOULD) of a silence where the seed defines a reply: NON_STRICT
     "imc/AcousticOperation/scenario/reverse-range": "reverse-range-reply",  # UAN/Task.cpp:303-315: no report
@@ -67,6 +69,7 @@ PASSES = ("imc/AcousticOperation/scenario/range", "imc/AcousticOperation/scenari
           "imc/AcousticOperation/scenario/msg-without-message-then-served",
           "imc/AcousticOperation/scenario/msg-short-then-served", "imc/AcousticOperation/scenario/reverse-range-then-served",
           "imc/AcousticOperation/scenario/unsupported-op-then-served",
+          "imc/AcousticOperation/scenario/range-outlives-msg-without-message",  # the RANGE ends all the same
           # Simulators.Iridium reports ERROR at once when the slow gateway does not answer: nothing after the ttl
           "imc/IridiumMsgTx/scenario/gateway-slow-then-back")
 
