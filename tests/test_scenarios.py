@@ -116,6 +116,7 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "reused-id-replaces": {"reused-request-id"},  # the first, replaced, says nothing more
     "reused-id-cancels": {"reused-request-id"},  # the second, cancelling the first, is not carried out
     "repeat-range-replaces": {"two-requests-one-system"},  # one terminal for two RANGEs to one system
+    "loses-first-copy": set(),  # every idempotent request answered on its resend
 }
 
 
@@ -607,3 +608,13 @@ def test_a_capability_judged_only_where_claimed_is_unsupported_without_claims(su
     assert case.verdict is Verdict.UNSUPPORTED and "judged only where --claims claims it" in case.detail
     claimed, _ = run_virtual(suite, chosen, broken="no-lbl-ranges")
     assert verdicts(claimed)[chosen[0].id] == "NON_STRICT"
+
+
+def test_a_lost_first_copy_is_resent_and_answered(suite, cases):
+    """A targeted loss (loses-first-copy): the first copy of each idempotent request never reaches the node, so every
+    answer a scenario gets to one comes after its resend, and nothing fails."""
+    result, _ = run_virtual(suite, cases, variant="loses-first-copy")
+    assert {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED)} == {}
+    resent = {c.id for c in result.cases for e in c.timeline if e["event"] == "resent"}
+    assert {"imc/HistoricDataQuery/scenario/query", "imc/AcousticSystemsQuery/scenario/reply",
+            "imc/LblConfig/scenario/get-cfg"} <= resent

@@ -100,5 +100,6 @@ VARIANTS = {
     "slow-iridium-link": "an Iridium message is transmitted 1.9 s after the request and its OK reaches the suite 3.8 s after it (1.8 s after a ttl of 2 s: the node's checking period and a slow link)",
     "reused-id-replaces": "an AcousticRequest reusing the req_id of an outstanding one replaces it: nothing more is said of the first, the second is carried out",
     "reused-id-cancels": "an AcousticRequest reusing the req_id of an outstanding one cancels it: the first ends in ERROR, the second is not carried out",
+    "loses-first-copy": "the first copy of each idempotent request is lost on its way (a targeted loss): only a resend is answered",
     "repeat-range-replaces": "a RANGE AcousticOperation to a system a RANGE is under way to replaces it: nothing more is said of the first, the second is carried out",
 }
