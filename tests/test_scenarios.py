@@ -117,6 +117,7 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "reused-id-cancels": {"reused-request-id"},  # the second, cancelling the first, is not carried out
     "repeat-range-replaces": {"two-requests-one-system"},  # one terminal for two RANGEs to one system
     "loses-first-copy": set(),  # every idempotent request answered on its resend
+    "forwards-on-period": set(),  # kept commands forwarded every 30 s, as DUNE, never an expired one
 }
 
 
@@ -618,3 +619,14 @@ def test_a_lost_first_copy_is_resent_and_answered(suite, cases):
     resent = {c.id for c in result.cases for e in c.timeline if e["event"] == "resent"}
     assert {"imc/HistoricDataQuery/scenario/query", "imc/AcousticSystemsQuery/scenario/reply",
             "imc/LblConfig/scenario/get-cfg"} <= resent
+
+
+def test_a_node_forwarding_on_dunes_period_is_caught_only_if_it_forwards_an_expired_command(suite, cases):
+    """The expiring command provoked: a node that forwards its kept commands every 30 s (as DUNE) passes; the same
+    node checking a command's timeout only on arrival (as DUNE) forwards the expired one when its recipient appears."""
+    chosen = [c for c in cases if c.id.startswith("imc/RemoteCommand/")]
+    case_id = "imc/RemoteCommand/scenario/expires-before-recipient-appears"
+    plain, _ = run_virtual(suite, chosen, variant="forwards-on-period")
+    assert {c.id: c.verdict.value for c in plain.cases if c.verdict is not Verdict.PASS} == {}
+    both, _ = run_virtual(suite, chosen, variant="forwards-on-period", broken="forwards-expired-stored")
+    assert verdicts(both)[case_id] == "FAIL"

@@ -101,5 +101,6 @@ VARIANTS = {
     "reused-id-replaces": "an AcousticRequest reusing the req_id of an outstanding one replaces it: nothing more is said of the first, the second is carried out",
     "reused-id-cancels": "an AcousticRequest reusing the req_id of an outstanding one cancels it: the first ends in ERROR, the second is not carried out",
     "loses-first-copy": "the first copy of each idempotent request is lost on its way (a targeted loss): only a resend is answered",
+    "forwards-on-period": "kept RemoteCommands are forwarded to their recipients on the link only every 30 s (as DUNE's Wi-Fi forwarding), not as they come or as a recipient appears; never an expired one",
     "repeat-range-replaces": "a RANGE AcousticOperation to a system a RANGE is under way to replaces it: nothing more is said of the first, the second is carried out",
 }

@@ -84,12 +84,13 @@ class History:
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
             self._forward(t)
 
-    def _forward(self, t: float) -> None:
+    def _forward(self, t: float, periodic: bool = False) -> None:
         """Resend the kept RemoteCommands whose recipient is a contact (as DUNE does over Wi-Fi, inside
-        HistoricData), when a command comes and when its recipient appears; the others stay kept for a QUERY's
-        reply. A command whose timeout passed while it was kept is not resent (forwards-expired-stored: it is, as
-        DUNE's DataStore checks a command's timeout only on arrival)."""
-        if self.broken == "never-forwards":
+        HistoricData), when a command comes and when its recipient appears (forwards-on-period: only every
+        ``FORWARD_PERIOD`` seconds, as DUNE); the others stay kept for a QUERY's reply. A command whose timeout passed
+        while it was kept is not resent (forwards-expired-stored: it is, as DUNE's DataStore checks a command's
+        timeout only on arrival)."""
+        if self.broken == "never-forwards" or (self.variant == "forwards-on-period") != periodic:
             return
         for command in [c for c in self.kept if c["abbrev"] == "RemoteCommand" and c["fields"]["destination"] in self.contacts]:
             self.kept.remove(command)
