@@ -3,7 +3,10 @@ takes with --target, with an in-memory link instead of UDP."""
 
 from __future__ import annotations
 
+import json
+
 from imc_conformance.core.runner import run_cases
+from imc_conformance.paths import VECTORS
 from imc_conformance.sessions.datagram import DatagramSession
 from imc_conformance.sessions.virtual import VirtualLink
 from imc_conformance.suites.imc.node import ReferenceNode
@@ -12,7 +15,9 @@ from imc_conformance.suites.imc.peer import DEFAULT_SYSTEM, ImcPeer
 NODE, OWN = ("127.0.0.1", 6002), ("127.0.0.1", 6001)
 PARAMS = {"peer": "imc-peer-1", "beacon": "b1", "sms_number": "+351000000000", "remote_system": 8208,
           "gateway": "http://127.0.0.1:8888/"}
-EVERYTHING = {"params": PARAMS, "effects": {"all"}}
+# what the reference node claims: every capability, for any system (LBL navigation among them)
+CLAIMS = {name: "any" for name in json.loads((VECTORS / "imc" / "exchanges.json").read_text())["capabilities"]}
+EVERYTHING = {"params": PARAMS, "effects": {"all"}, "claims": CLAIMS}
 LIVE_KINDS = ("scenario", "robustness")
 
 

@@ -184,7 +184,9 @@ def test_serve_and_run_agree_over_loopback(node, tmp_path, capsys):
                  "--time-scale", "2", "--json", str(path)])
     doc = json.loads(path.read_text())
     assert code == 0, capsys.readouterr().out
-    assert set(doc["summary"]) <= {"PASS", "IMPL_DEFINED"} and doc["summary"]["PASS"] >= 15  # readings it takes
+    assert set(doc["summary"]) <= {"PASS", "IMPL_DEFINED", "UNSUPPORTED"} and doc["summary"]["PASS"] >= 15  # readings
+    unclaimed = [c for m in doc["messages"] for c in m["cases"] if c["verdict"] == "UNSUPPORTED"]
+    assert all("judged only where --claims claims it" in c["detail"] for c in unclaimed)  # LBL navigation, unclaimed
     assert "profile: seed" in doc["notes"] and any(n.startswith("parameters: peer=imc-peer-1") for n in doc["notes"])
 
 

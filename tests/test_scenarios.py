@@ -75,6 +75,12 @@ CAUGHT = {
     "msg-ends-in-range": ("imc/AcousticOperation/scenario/msg", "FAIL"),
     "answers-bad-crc": ("imc/HistoricDataQuery/scenario/bad-crc-dropped", "FAIL"),
     "forwards-expired": ("imc/RemoteCommand/scenario/expired-not-forwarded", "FAIL"),
+    "forwards-expired-stored": ("imc/RemoteCommand/scenario/expires-before-recipient-appears", "FAIL"),
+    "dies-on-empty-msg": ("imc/AcousticOperation/scenario/msg-without-message-then-served", "FAIL"),
+    "transmits-newest-first": ("imc/HistoricDataQuery/scenario/sample-order-rounds", "FAIL"),
+    "late-success": ("imc/IridiumMsgTx/scenario/gateway-slow-then-back", "FAIL"),
+    "no-lbl-ranges": ("imc/LblConfig/scenario/ranges-after-set", "NON_STRICT"),
+    "restarts-on-empty-msg": ("imc/AcousticOperation/scenario/range-outlives-msg-without-message", "FAIL"),
     "empty-when-small": ("imc/HistoricDataQuery/scenario/sample-order", "NON_STRICT"),
     "clear-keeps-data": ("imc/HistoricDataQuery/scenario/clear-empties", "NON_STRICT"),
     "ok-when-gateway-fails": ("imc/IridiumMsgTx/scenario/gateway-fails", "NON_STRICT"),
@@ -110,6 +116,8 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "reused-id-replaces": {"reused-request-id"},  # the first, replaced, says nothing more
     "reused-id-cancels": {"reused-request-id"},  # the second, cancelling the first, is not carried out
     "repeat-range-replaces": {"two-requests-one-system"},  # one terminal for two RANGEs to one system
+    "loses-first-copy": set(),  # every idempotent request answered on its resend
+    "forwards-on-period": set(),  # kept commands forwarded every 30 s, as DUNE, never an expired one
 }
 
 
@@ -417,7 +425,7 @@ def test_what_the_exchanges_name_exists(suite, cases):
 
 def test_a_step_may_not_cover_an_unknown_or_untestable_statement(suite, cases):
     case = next(c.data for c in cases if c.id == "imc/LblConfig/scenario/get-cfg")
-    for sid, why in (("LblConfig.nothing", "not a statement"), ("LblRange.notify", "marked untestable")):
+    for sid, why in (("LblConfig.nothing", "not a statement"), ("AcousticLink.report", "marked untestable")):
         broken = dict(case, steps=[dict(case["steps"][0]), dict(case["steps"][1], covers=[sid])])
         problem = suite.live_problem("scenario", broken)
         assert problem is not None and problem[0] == ".steps[1].covers[0]" and why in problem[1]
@@ -589,3 +597,36 @@ def test_a_counting_step_takes_only_what_its_only_holds_and_names_real_fields(su
     found = next(c for c in result.cases if c.id == case["id"])
     assert found.verdict is Verdict.PASS
     assert any(e.get("note") == "not what the step counts (its only)" for e in found.timeline)
+
+
+def test_a_capability_judged_only_where_claimed_is_unsupported_without_claims(suite, cases):
+    """LBL navigation (lbl-ranges): a node that does not navigate with LBL sends no LblRange, so without a claims file
+    its scenario is not claimed (UNSUPPORTED), never a failure; claimed, a node that sends none is caught."""
+    chosen = [c for c in cases if c.id == "imc/LblConfig/scenario/ranges-after-set"]
+    options = {k: v for k, v in EVERYTHING.items() if k != "claims"}
+    unclaimed, _ = run_virtual(suite, chosen, options=options, broken="no-lbl-ranges")
+    case = next(c for c in unclaimed.cases if c.id == chosen[0].id)
+    assert case.verdict is Verdict.UNSUPPORTED and "judged only where --claims claims it" in case.detail
+    claimed, _ = run_virtual(suite, chosen, broken="no-lbl-ranges")
+    assert verdicts(claimed)[chosen[0].id] == "NON_STRICT"
+
+
+def test_a_lost_first_copy_is_resent_and_answered(suite, cases):
+    """A targeted loss (loses-first-copy): the first copy of each idempotent request never reaches the node, so every
+    answer a scenario gets to one comes after its resend, and nothing fails."""
+    result, _ = run_virtual(suite, cases, variant="loses-first-copy")
+    assert {c.id: c.detail for c in result.cases if c.verdict not in (Verdict.PASS, Verdict.IMPL_DEFINED)} == {}
+    resent = {c.id for c in result.cases for e in c.timeline if e["event"] == "resent"}
+    assert {"imc/HistoricDataQuery/scenario/query", "imc/AcousticSystemsQuery/scenario/reply",
+            "imc/LblConfig/scenario/get-cfg"} <= resent
+
+
+def test_a_node_forwarding_on_dunes_period_is_caught_only_if_it_forwards_an_expired_command(suite, cases):
+    """The expiring command provoked: a node that forwards its kept commands every 30 s (as DUNE) passes; the same
+    node checking a command's timeout only on arrival (as DUNE) forwards the expired one when its recipient appears."""
+    chosen = [c for c in cases if c.id.startswith("imc/RemoteCommand/")]
+    case_id = "imc/RemoteCommand/scenario/expires-before-recipient-appears"
+    plain, _ = run_virtual(suite, chosen, variant="forwards-on-period")
+    assert {c.id: c.verdict.value for c in plain.cases if c.verdict is not Verdict.PASS} == {}
+    both, _ = run_virtual(suite, chosen, variant="forwards-on-period", broken="forwards-expired-stored")
+    assert verdicts(both)[case_id] == "FAIL"

@@ -109,7 +109,8 @@ class DatagramSession:
         conductor = self.conductor = Conductor(jobs, lambda job: job.request.params["program"],
                                                Addressing(self.peer.system, None, self.peer.node,
                                                           getattr(self.peer, "other", None),
-                                                          getattr(self.peer, "stranger", None)), self.transport.epoch,
+                                                          getattr(self.peer, "stranger", None),
+                                                          getattr(self.peer, "late", None)), self.transport.epoch,
                                                first_unique=self.first_unique)
         self.began = self.transport.now()
         self._transmit(conductor.start(self.began))
@@ -220,6 +221,9 @@ class DatagramSession:
             why = self.transport.send(item.composed.data)
             if why:  # the scenario cannot go on; the node is not to blame
                 self._transmit(self.conductor.undeliverable(self.transport.now(), item.job, why))
+            spoke = getattr(self.peer, "spoke", None)  # a system the session speaks as may now be announced
+            if spoke is not None and not why:
+                self._send(spoke(self.transport.now(), item.composed.decoded))
 
     def _send(self, datagrams) -> None:
         for address, data in datagrams:

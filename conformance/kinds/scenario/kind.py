@@ -101,6 +101,9 @@ def gate(case: dict, options: dict, behaviour: dict) -> Request | None:
         why = ("the target serves it only to its own system, and the suite speaks as another"
                if claims.get(capability) == "self" else "the target does not claim it")
         return skip("UNSUPPORTED", f"not claimed: {capability} ({what}): {why}")
+    if claims is None and capability is not None and behaviour["capabilities"][capability].get("claimed_only"):
+        what = behaviour["capabilities"][capability]["description"]
+        return skip("UNSUPPORTED", f"not claimed: {capability} ({what}): judged only where --claims claims it")
     for rule in (options.get("profile") or {}).get("rules", ()):
         if "not_applicable" in rule and any(fnmatch.fnmatchcase(case["id"], g) for g in rule["scenarios"]):
             return skip("INCONCLUSIVE", f"not applicable under the profile: {rule['not_applicable']} ({rule['citation']})")

@@ -69,7 +69,7 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params, statem
     examples = {name: int(p["example"], 0) if p["type"] == "integer" else p["example"]
                 for name, p in behaviour["params"].items()}
     examples.update(params or {})
-    scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2, "other": 3, "stranger": 4})
+    scope = Scope(examples, lambda _name: 1, 0.0, addresses={"system": 1, "node": 2, "other": 3, "stranger": 4, "late": 5})
     program = Program(case["id"], case, tuple(behaviour["exchanges"]), wire, edition, examples)
     seen, sends = set(), {}
     for i, step in enumerate(case["steps"]):
@@ -97,7 +97,7 @@ def _lint_steps(case, wire, behaviour, edition, known, fields_of, params, statem
                 return where + ".send.abbrev", f"unknown message {message['abbrev']!r}"
             try:
                 resolved = resolve_message(message, scope, wire, edition)
-                composed = wire.compose(resolved, step.get("encoding"), Addressing(1, 1, 2, 3).speaking_as(step.get("as")),
+                composed = wire.compose(resolved, step.get("encoding"), Addressing(1, 1, 2, 3, 4, 5).speaking_as(step.get("as")),
                                         0.0, step["id"], edition)
             except (Unresolved, KeyError, ValueError) as exc:
                 return where + ".send", f"cannot be sent in {edition}: {exc}"

@@ -89,7 +89,8 @@ class PassiveExchanges:
         origin = (getattr(w.where, "src", None), getattr(w.where, "sport", None))  # the datagram's sender
         if w.src != w.dst and origin[0] is not None and self.senders.get(w.dst) == origin:
             return out  # sent from its addressee's own address: echoed back by it (DUNE's router does), not new
-        self.senders[w.src] = origin
+        if w.src != w.dst:  # a frame to its own source (a forgery of the node's id sent to it) says not where it is
+            self.senders[w.src] = origin
         answers = False  # a frame that answers an open request is not a new request (CLEAR answers CLEAR)
         for rule in self.by_reply.get(w.message, ()):
             if _matches(w.fields, rule.reply_when):

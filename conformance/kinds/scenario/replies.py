@@ -73,11 +73,11 @@ class Replies:
         return True
 
     def _for_this_speaker(self, step: StepState, parsed: Parsed) -> bool:
-        """Whether a frame may be for the step: not when it is addressed to one of the session's two systems and
-        the step awaits the other's (a reply to the request one client sent is not the other client's); a step
+        """Whether a frame may be for the step: not when it is addressed to one of the session's systems and
+        the step awaits another's (a reply to the request one client sent is not the other client's); a step
         that awaits no reply takes what is addressed to the system it names (``to``), or to the session's own."""
         to = self.wire.destination(parsed)
-        ours = (self.addressing.system, self.addressing.other)
+        ours = (self.addressing.system, self.addressing.other, self.addressing.late)
         if to is None or self.addressing.other is None or to[0] not in ours:
             return True
         ref = step.spec.get("reply_to")

@@ -30,7 +30,7 @@ class Scope:
     epoch: float = 0.0
     sent: dict = field(default_factory=dict)
     replies: dict = field(default_factory=dict)
-    addresses: dict = field(default_factory=dict)  # "system" (the session's), "node", "other", "stranger"
+    addresses: dict = field(default_factory=dict)  # "system" (the session's), "node", "other", "stranger", "late"
 
     def symbol(self, spec: dict):
         (key, arg), = spec.items()

@@ -15,17 +15,22 @@ from typing import Protocol
 class Addressing:
     """Who talks: the session (``system``, and one ``entity`` per scenario, so replies can be told apart), the
     session's second system on the link (``other``: a second client, for steps sent ``as`` it), the node
-    (``node``; None until learned) and a system the session never announces (``stranger``: a sender the node has
-    never heard of, for a step's header). Suites without addresses leave them None."""
+    (``node``; None until learned), a system the session never announces (``stranger``: a sender the node has
+    never heard of, for a step's header) and one it announces only once a step has spoken as it (``late``: a system
+    that appears on the link during a scenario). Suites without addresses leave them None."""
 
     system: int | None = None
     entity: int | None = None
     node: int | None = None
     other: int | None = None
     stranger: int | None = None
+    late: int | None = None
 
     def speaking_as(self, who: str | None) -> "Addressing":
-        """The addressing a step sends with: the session's (``who`` None) or its second system's (``"other"``)."""
+        """The addressing a step sends with: the session's (``who`` None), its second system's (``"other"``) or
+        the system that appears late (``"late"``)."""
+        if who == "late":
+            return replace(self, system=self.late)
         return self if who is None else replace(self, system=self.other, other=self.system)
 
     def for_entity(self, entity: int | None) -> "Addressing":
@@ -33,7 +38,8 @@ class Addressing:
 
     def symbols(self) -> dict:
         """What ``{"$address": NAME}`` resolves to."""
-        return {"system": self.system, "node": self.node, "other": self.other, "stranger": self.stranger}
+        return {"system": self.system, "node": self.node, "other": self.other, "stranger": self.stranger,
+                "late": self.late}
 
     def from_node(self, wire, parsed) -> bool:
         """Whether something arrived from the node (true where the protocol has no addresses, or the node's id is

@@ -4,7 +4,8 @@ target and to the target host's discovery ports 30100-30104 every 10 s, heart-be
 node's id from its first valid frame (unless given), and says the target is ready once a valid frame from
 it arrived (at once when its id is given: the seeds do not make Heartbeat periodic, erratum E7). It also announces
 a second system (``other``, named ``<name>-2``, on the same socket), the second client that scenarios about two
-clients on the link and about forwarding speak as.
+clients on the link and about forwarding speak as; and a third (``late``, named ``<name>-3``) only once a scenario has
+spoken as it: a system that appears on the link during a run (a recipient that comes back into reach).
 
 It tells when the node is gone (liveness): a node that has been sending Heartbeats and then sends nothing at all for
 five times its longest gap between them (at least 5 s) has stopped, and the scenarios waiting on it need not each
@@ -57,6 +58,8 @@ class ImcPeer:
         self.epoch, self.name = epoch, name
         self.other = other_system(system, node)  # the second client: announced under its own name, same socket
         self.stranger = other_system(self.other, node)  # never announced: a sender the node has not heard of
+        self.late = other_system(self.stranger, node)  # announced once a step has spoken as it (it appears)
+        self.appeared = False
         self.notes = [f"the session's IMC id: {system:#06x} (chosen for this run; --src sets one)"] if chosen else []
         self.given = node is not None
         self.ready = self.given
@@ -91,19 +94,31 @@ class ImcPeer:
         starting when the last one came, or forgot it, learns of the session from the next: DUNE takes Announces
         only there)."""
         out = []
-        for announce in (self._announce(t), self._announce(t, second=True)):
+        announces = [self._announce(t), self._announce(t, second=True)] + ([self._announce(t, third=True)]
+                                                                          if self.appeared else [])
+        for announce in announces:
             out += [(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]
         return out
+
+    def spoke(self, t: float, decoded: dict) -> list[tuple[object, bytes]]:
+        """A scenario sent a frame; the first one it sends as ``late`` makes that system appear: it is announced at
+        once and every 10 s from then on."""
+        if self.appeared or decoded.get("header", {}).get("src") != self.late:
+            return []
+        self.appeared = True
+        announce = self._announce(t, third=True)
+        return [(None, announce)] + [((self.host, port), announce) for port in DISCOVERY_PORTS]
 
     def accepts(self, parsed) -> bool:
         """Whether a frame is for the session (malformed frames are, so the byte-level checks see them)."""
         if parsed.decoded is None:
             return True
         header = parsed.decoded["header"]
-        return header["src"] not in (self.system, self.other) and header["dst"] in (self.system, self.other, 0xFFFF, 0)
+        ours = (self.system, self.other) + ((self.late,) if self.appeared else ())
+        return header["src"] not in ours + (self.late,) and header["dst"] in ours + (0xFFFF, 0)
 
     def own(self, parsed) -> bool:
-        return parsed.decoded is not None and parsed.decoded["header"]["src"] in (self.system, self.other)
+        return parsed.decoded is not None and parsed.decoded["header"]["src"] in (self.system, self.other, self.late)
 
     def impostor(self, parsed) -> str | None:
         if parsed.decoded is None or parsed.message != "Announce" or not self.own(parsed):
@@ -123,7 +138,7 @@ class ImcPeer:
         if parsed.decoded is None or not from_target:
             return
         src = parsed.decoded["header"]["src"]
-        if self.node is None and src not in (self.system, self.other):
+        if self.node is None and src not in (self.system, self.other, self.late):
             self.node = src
         if src == self.node:
             self.ready = True
@@ -143,14 +158,15 @@ class ImcPeer:
         return (f"the node has sent nothing for {silent:.1f} s, after Heartbeats at most {self.gap:.1f} s apart: it is "
                 "taken for gone (liveness), and what waited on it was decided then, untested")
 
-    def _announce(self, t: float, second: bool = False) -> bytes:
-        """The Announce of the session's system, or of its second: under its own name (DUNE keeps contacts by
-        name) and stamped a millisecond later (DUNE's discovery drops an Announce from an address whose last one
-        carried the same timestamp, whatever system it names)."""
-        fields = {"sys_name": f"{self.name}-2" if second else self.name, "sys_type": 0, "owner": 0xFFFF, "lat": 0.0,
-                  "lon": 0.0, "height": 0.0, "services": self.service}
-        return self._frame(t, "Announce", fields, dst=0, src=self.other if second else self.system,
-                           later=0.001 if second else 0.0)
+    def _announce(self, t: float, second: bool = False, third: bool = False) -> bytes:
+        """The Announce of the session's system, or of its second or third: each under its own name (DUNE keeps
+        contacts by name) and stamped a millisecond apart (DUNE's discovery drops an Announce from an address whose
+        last one carried the same timestamp, whatever system it names)."""
+        which = 2 if third else 1 if second else 0
+        fields = {"sys_name": f"{self.name}-{which + 1}" if which else self.name, "sys_type": 0, "owner": 0xFFFF,
+                  "lat": 0.0, "lon": 0.0, "height": 0.0, "services": self.service}
+        return self._frame(t, "Announce", fields, dst=0, src=(self.system, self.other, self.late)[which],
+                           later=0.001 * which)
 
     def _heartbeat(self, t: float) -> bytes:
         return self._frame(t, "Heartbeat", {}, dst=0xFFFF if self.node is None else self.node)

@@ -74,6 +74,12 @@ BREAKS = {
     "succeeds-to-unknown": "an AcousticRequest to a destination it does not know ends in SENT (a SHOULD)",
     "dies-on-compressed-history": "after a CompressedHistory, no request is served",
     "repeat-range-drops-both": "a RANGE AcousticOperation to a system a RANGE is under way to drops both: neither ends",
+    "forwards-expired-stored": "a RemoteCommand kept for a recipient not on the link is forwarded when the recipient appears, even after its timeout passed (as DUNE's DataStore, which checks a timeout only on arrival)",
+    "dies-on-empty-msg": "after an AcousticOperation MSG or MSG_SHORT with no message (unanswered), acoustic requests go unanswered (the heartbeat goes on)",
+    "transmits-newest-first": "historic samples are transmitted newest first, whatever their priority",
+    "late-success": "with its gateway slow, an Iridium message reported EXPIRED at its time to live is reported OK once the gateway answers, long after it",
+    "no-lbl-ranges": "with beacons set and an acoustic peer, it never reports an LblRange (a SHOULD; judged only where claimed)",
+    "restarts-on-empty-msg": "an AcousticOperation MSG or MSG_SHORT with no message restarts its acoustic service: a RANGE under way never ends (as DUNE's CommManager, which dies on it and is restarted)",
     "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 
@@ -94,5 +100,7 @@ VARIANTS = {
     "slow-iridium-link": "an Iridium message is transmitted 1.9 s after the request and its OK reaches the suite 3.8 s after it (1.8 s after a ttl of 2 s: the node's checking period and a slow link)",
     "reused-id-replaces": "an AcousticRequest reusing the req_id of an outstanding one replaces it: nothing more is said of the first, the second is carried out",
     "reused-id-cancels": "an AcousticRequest reusing the req_id of an outstanding one cancels it: the first ends in ERROR, the second is not carried out",
+    "loses-first-copy": "the first copy of each idempotent request is lost on its way (a targeted loss): only a resend is answered",
+    "forwards-on-period": "kept RemoteCommands are forwarded to their recipients on the link only every 30 s (as DUNE's Wi-Fi forwarding), not as they come or as a recipient appears; never an expired one",
     "repeat-range-replaces": "a RANGE AcousticOperation to a system a RANGE is under way to replaces it: nothing more is said of the first, the second is carried out",
 }

@@ -79,7 +79,8 @@ def simulated(mode: str, ttl: float, states: tuple, attempt: str, expired: str, 
         return (*first, (0.2, attempt, ""), (ttl + 4.0, attempt, ""), (ttl + 4.5, failed, text("no answer")))
     if SLOW < ttl or broken == "sms-ignores-timeout" and attempt == "TRANSMITTING":
         return (*first, (0.2, attempt, ""), (SLOW, states[-1][1], ""))
-    return (*first, (0.2, attempt, ""), (float(ttl), expired, text("no answer from the gateway in time")))
+    late = ((SLOW, states[-1][1], ""),) if broken == "late-success" and attempt == "TRANSMIT" else ()
+    return (*first, (0.2, attempt, ""), (float(ttl), expired, text("no answer from the gateway in time")), *late)
 
 
 def _body(raw: bytes) -> bytes:

@@ -53,7 +53,9 @@ class History:
             self.kept = [m for m in self.kept if m["abbrev"] != "RemoteCommand"
                          or as_float(m["fields"]["timeout"]) > self.epoch0 + t]
         items = list(self.kept)
-        if self.broken != "transmits-in-arrival-order":
+        if self.broken == "transmits-newest-first":
+            items.reverse()
+        elif self.broken != "transmits-in-arrival-order":
             items.sort(key=_priority)
         data = {"abbrev": "HistoricData", "fields": {"base_lat": 0.0, "base_lon": 0.0, "base_time": 0.0, "data": []}}
         room = DATAGRAM - REPLY_OTHER if self.broken == "ignores-max-size" else min(max_size, DATAGRAM - REPLY_OTHER)
@@ -110,13 +112,19 @@ class History:
             self.kept.append({"abbrev": "RemoteCommand", "fields": f})
             self._forward(t)
 
-    def _forward(self, t: float) -> None:
+    def _forward(self, t: float, periodic: bool = False) -> None:
         """Resend the kept RemoteCommands whose recipient is a contact (as DUNE does over Wi-Fi, inside
-        HistoricData); the others stay kept for a QUERY's reply."""
-        if self.broken == "never-forwards":
+        HistoricData), when a command comes and when its recipient appears (forwards-on-period: only every
+        ``FORWARD_PERIOD`` seconds, as DUNE); the others stay kept for a QUERY's reply. A command whose timeout passed
+        while it was kept is not resent (forwards-expired-stored: it is, as DUNE's DataStore checks a command's
+        timeout only on arrival)."""
+        if self.broken == "never-forwards" or (self.variant == "forwards-on-period") != periodic:
             return
         for command in [c for c in self.kept if c["abbrev"] == "RemoteCommand" and c["fields"]["destination"] in self.contacts]:
             self.kept.remove(command)
+            if as_float(command["fields"]["timeout"]) <= self.epoch0 + t and self.broken not in (
+                    "forwards-expired", "keeps-expired-commands", "forwards-expired-stored"):
+                continue  # expired while kept: no more attempts
             destination = command["fields"]["destination"]
             if self.broken == "forwards-as-own":
                 command = {**command, "fields": {**command["fields"], "original_source": self.system}}

@@ -24,9 +24,17 @@ class Link:
     """The reference node's loss model and other traffic (a mixin of ``ReferenceNode``)."""
 
     def _lost(self, message: dict, reply: bool = False) -> bool:
-        """Drop at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
+        """Drop the first copy of each idempotent request (loses-first-copy: the requester must resend it), or drop
+        at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
         copies of one message (a scenario resends a few times: a link that loses every try is a dead link, not a
         lossy one; counted per message, not per kind, as other traffic between two tries must not reset it)."""
+        if self.variant == "loses-first-copy" and not reply and self._idempotent(message, reply):
+            key = (message["abbrev"], repr(message["fields"]))
+            first = key not in self.loss_runs
+            self.loss_runs[key] = 1
+            if len(self.loss_runs) > MAX_LOSS_KEYS:
+                self.loss_runs.clear()
+            return first
         if not self.loss or not self._idempotent(message, reply):
             return False
         key = (message["abbrev"], repr(message["fields"]))  # a resent request, or its reply, is the same message

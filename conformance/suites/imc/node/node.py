@@ -42,6 +42,9 @@ from .link import TRAFFIC_TICK, Link
 SERVICE_URL = re.compile(r"imc\+udp://([^:/;]+|\[[0-9a-fA-F:]+\]):([0-9]+)/?")
 MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
+FORWARD_PERIOD = 30.0  # seconds between two forwardings of the kept commands (forwards-on-period: DUNE's Wi-Fi period)
+LBL_PERIOD = 2.0  # seconds between two LblRanges while it navigates with LBL (beacons set, an acoustic peer)
+LBL_RANGE, LBL_STEP = 500.0, 100.0  # metres: the simulated range of the first beacon, and how much further each next one is
 
 
 class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
@@ -91,13 +94,16 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
         self.unjudged = 0  # frames beyond the reference codec's bounds (nested too deep), dropped as well
         self.next_beat = self.next_announce = None
         self.next_traffic, self.ticks = None, 0  # vehicle-traffic
+        self.next_forward = None  # forwards-on-period: when the kept commands are next forwarded
+        self.next_lbl, self.lbl_turn = None, 0  # LBL navigation: when the next LblRange is due, and for which beacon
 
     # ------------------------------------------------------------------ the caller's interface
 
     @property
     def deadline(self) -> float | None:
         times = [self.queue[0][0]] if self.queue else []
-        times += [x for x in (self.next_beat, self.next_announce, self.next_traffic) if x is not None]
+        times += [x for x in (self.next_beat, self.next_announce, self.next_traffic, self.next_lbl, self.next_forward)
+                  if x is not None]
         return min(times, default=None)
 
     def receive(self, t: float, data: bytes, source: tuple) -> None:
@@ -170,11 +176,27 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
         if self.next_traffic is not None and self.next_traffic <= t:
             self.next_traffic, self.ticks = t + TRAFFIC_TICK, self.ticks + 1
             out += [(addr, frame) for frame in self._traffic(t) for addr in self.contacts.values()]
+        if self.next_forward is not None and self.next_forward <= t:
+            self.next_forward = t + FORWARD_PERIOD
+            self._forward(t, periodic=True)
+        if self.next_lbl is not None and self.next_lbl <= t:
+            out += [(addr, frame) for frame in self._lbl_range(t) for addr in self.contacts.values()]
         while self.queue and self.queue[0][0] <= t:
             _, _, dest, data, tag = heapq.heappop(self.queue)
             if tag not in self.cancelled:
                 out.append((dest, data))
         return out
+
+    def _lbl_range(self, t: float) -> list[bytes]:
+        """While it navigates with LBL (beacons set, an acoustic peer to range with), one LblRange every
+        ``LBL_PERIOD`` seconds, to each beacon in turn: its place in the configuration and a simulated range."""
+        self.next_lbl = t + LBL_PERIOD if self.beacons and self.peers else None
+        if self.next_lbl is None or self.broken == "no-lbl-ranges":
+            return []
+        beacon = self.lbl_turn % len(self.beacons)
+        self.lbl_turn += 1
+        fields = {"id": beacon, "range": LBL_RANGE + LBL_STEP * beacon}
+        return [self._frame(t, "LblRange", fields, dst=UNKNOWN_SYSTEM, ent=0)]
 
     # ------------------------------------------------------------------ discovery
 
@@ -201,6 +223,9 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
                 if self.variant == "vehicle-traffic" and self.next_traffic is None:
                     self.next_traffic = t
                 self.next_announce = t + period if self.next_announce is None else self.next_announce
+                self._forward(t)  # the kept commands for a system that has just appeared
+                if self.variant == "forwards-on-period" and self.next_forward is None:
+                    self.next_forward = t + FORWARD_PERIOD
             return
 
     def _announce(self, t: float) -> bytes:
@@ -237,6 +262,7 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
         if op == self._v("LblConfig", "op", "SET_CFG"):
             merged = self.beacons if self.broken == "merges-set-cfg" else []
             self.beacons = merged + [_rounded(b) if self.broken == "rounds-beacons" else b for b in message["fields"]["beacons"]]
+            self.next_lbl = t + LBL_PERIOD if self.beacons and self.peers else None
             if self.broken == "acknowledges-set-cfg":
                 self._reply(t, PROCESSING, message, "LblConfig", {"op": self._v("LblConfig", "op", "CUR_CFG"),
                                                                   "beacons": self.beacons})
