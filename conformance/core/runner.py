@@ -11,6 +11,7 @@ from dataclasses import replace
 from typing import Callable
 
 from .cases import Case, expectation, passive_id
+from .evidence import Evidence
 from .causes import about, cause_of, group_causes
 from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
@@ -27,7 +28,8 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
               errata: str | None = None, waivers: Waivers | None = None, strict: bool = False,
               notes: list[str] | None = None, progress: Callable[[int], None] | None = None,
               options: dict | None = None, clock: Callable[[], float] = time.perf_counter,
-              started: str | None = None, provenance: Provenance | None = None, exitfirst: bool = False) -> RunResult:
+              started: str | None = None, provenance: Provenance | None = None, exitfirst: bool = False,
+              corpus: list[Case] | None = None, evidence: bool = True) -> RunResult:
     """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far, every
     ``PROGRESS_EVERY`` answers and at the end).
 
@@ -45,6 +47,11 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     ``exitfirst``: the run stops once a case is done and fails (its verdict, or a finding it filed elsewhere): the
     result holds the cases done by then, with a note naming that case.
 
+    ``evidence``: a refusal counts only from an implementation shown to do what it refuses (see ``Evidence``);
+    ``corpus`` (the cases loaded, of which ``cases`` are a selection): where the selection shows nothing of a group,
+    the base a refused case names (else a valid case of its group) is asked too. False: each refusal is judged alone
+    (a fuzzer's generated frames, whose deviations are what it reports).
+
     The cyclic garbage collector is paused while the run lasts: a run makes little cyclic garbage, and each full
     collection would walk the whole loaded corpus again.
     """
@@ -52,14 +59,14 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     gc.disable()
     try:
         return _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-                    started, provenance, exitfirst)
+                    started, provenance, exitfirst, corpus, evidence)
     finally:
         if collecting:
             gc.enable()
 
 
 def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-         started, provenance, exitfirst) -> RunResult:
+         started, provenance, exitfirst, corpus, evidence) -> RunResult:
     started = started or dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = clock()
     hello = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
@@ -79,6 +86,7 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     jobs = [Job(name, c.id, r) for c in cases for r in plans[c.id]]
     # per case: its data, how it is judged, and what its checks found (judged in place as answers come)
     judges = {c.id: (c.data, kinds[c.kind].judge, []) for c in cases}
+    weigh = Evidence(suite, cases, edition) if evidence else None
     timelines: dict[str, list[dict]] = {}
     answered: list[str] = []  # the case of each job answered (counted if the run is interrupted)
     waivers = waivers or Waivers()
@@ -93,6 +101,8 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
             timelines[job.case_id] = judged.timeline
         else:
             found.append(judged)
+            if weigh is not None:
+                weigh.answered(job, answer, judged)
         answered.append(job.case_id)
         if left is not None:
             left[job.case_id] -= 1
@@ -124,6 +134,10 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         cases = [c for c in cases if plans[c.id] and counts[c.id] == len(plans[c.id])]
         notes.insert(0, (f"stopped at the first failing case, {stopped_at[0]}" if complete else "interrupted")
                      + f": {len(cases)} of {len(plans)} cases were done; the others are not in this result")
+    if weigh is not None:
+        if complete and not stopped_at:
+            weigh.probe(session, corpus or (), emits)
+        weigh.review({case_id: found for case_id, (_, _, found) in judges.items()})
     untested, why = hello_gaps(suite, cases, edition, emits, plans)
     notes += why + list(getattr(session, "notes", ()))
     filed: dict[str, list[CaseResult]] = defaultdict(list)

@@ -296,6 +296,29 @@ class VectorKind:
 
     # ------------------------------------------------------------ evidence
 
+    def evidence(self, case: dict, edition: str, request: Request, answer: Answer) -> tuple[str, str] | None:
+        """What an answer shows of the implementation (core.evidence): a valid case answered shows that it reads
+        (``decode-<encoding>``, a roundtrip too) or encodes (``encode-<encoding>``) the case's group in that encoding;
+        a refusal (of any case: a reader of no valid frame refuses the valid ones too) counts only from an
+        implementation that does."""
+        kind = answer.kind
+        if (kind != "ok" and kind != "rejected") or request.op == "describe":
+            return None
+        compiled = request.context if request.context is not None else self.compiled(case, edition)
+        capability = f"{'encode' if request.op == 'encode' else 'decode'}-{request.encoding}"
+        if kind == "ok":
+            return ("shows", capability) if compiled.expect == "valid" else None
+        return "needs", capability
+
+    @staticmethod
+    def unproven(check: CheckResult, group: str, capability: str) -> CheckResult:
+        """A refusal from an implementation shown to read (or encode) no valid case of the group: not tested."""
+        op, encoding = capability.split("-", 1)
+        did = f"reads no valid {group} frame" if op == "decode" else f"encodes no valid {group} message"
+        return CheckResult(check.check, Verdict.UNSUPPORTED,
+                           f"not tested: the implementation {did} ({encoding}), so its refusal shows nothing "
+                           f"(it answered: {check.detail})", note=check.note)
+
     def failure(self, case: dict, edition: str, request: Request, detail: str, expected: bytes, actual: bytes | None,
                 locate: bool = False) -> CheckResult:
         """A FAIL that keeps both frames and the differing byte ranges, named by field; ``locate`` adds where

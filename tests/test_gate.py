@@ -1,0 +1,113 @@
+"""A gate that claims only what it observed: a refusal counts only from an implementation shown to read what it
+refused, a message none of whose valid cases was tested is not PASS, every report's headline says what was tested, and
+``--require`` fails a run that did not test a required message."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from imc_conformance.cli import main
+
+HERE = Path(__file__).resolve().parent
+PARTIAL = f"{HERE / 'partial_codec_adapter.py'}:Adapter"
+REFUSE_ALL = f"{HERE / 'partial_codec_adapter.py'}:RefuseAll"
+IMPLEMENTED = {"Heartbeat", "LblRange"}
+
+
+def run(capsys, *args) -> tuple[int, str]:
+    code = main(["run", "--no-progress", *args])
+    out = capsys.readouterr()
+    return code, out.out + out.err
+
+
+@pytest.fixture(scope="module")
+def partial_reports(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("partial")
+    code = main(["run", "--no-progress", "--adapter", PARTIAL, "--json", str(folder / "r.json"), "--markdown",
+                 str(folder / "r.md"), "--junit", str(folder / "r.xml"), "--html", str(folder / "r.html")])
+    return code, folder
+
+
+def test_a_codec_of_two_messages_passes_for_two_and_no_more(partial_reports):
+    code, folder = partial_reports
+    assert code == 0  # a partial implementation passes for what it does; the rest is reported as not tested
+    doc = json.loads((folder / "r.json").read_text(encoding="utf-8"))
+    verdicts = {m["name"]: m["verdict"] for m in doc["messages"]}
+    assert len(verdicts) == 31
+    assert {name for name, v in verdicts.items() if v == "PASS"} == IMPLEMENTED
+    assert set(verdicts.values()) == {"PASS", "UNSUPPORTED"}
+    assert doc["headline"] == "PASS for 2 of 31 messages; 29 not tested"
+    # no case of an unimplemented message passes: its invalid frames' refusals show nothing
+    others = [c for m in doc["messages"] if m["name"] not in IMPLEMENTED for c in m["cases"]]
+    assert others and {c["verdict"] for c in others} == {"UNSUPPORTED"}
+    refused = next(c for c in others if c["id"] == "imc/Announce/crc/header-src/le")
+    assert refused["detail"].startswith("decode-le: not tested: the implementation reads no valid Announce frame (le)")
+    markdown = (folder / "r.md").read_text(encoding="utf-8")
+    assert markdown.splitlines()[0].startswith("## ✅ IMC conformance: PASS for 2 of 31 messages; 29 not tested")
+    rows = [line for line in markdown.splitlines() if line.startswith("| ") and (" (1" in line or " (2" in line)]
+    assert len(rows) == 31
+    for line in rows:
+        name = line[2:].split(" (", 1)[0]
+        assert ("PASS |" in line) == (name in IMPLEMENTED), line
+    assert 'name="headline" value="PASS for 2 of 31 messages; 29 not tested"' in (folder / "r.xml").read_text()
+    html = (folder / "r.html").read_text(encoding="utf-8")
+    assert 'id="headline">PASS for 2 of 31 messages; 29 not tested<' in html
+
+
+def test_the_terminal_headline_and_the_coverage_gate(capsys):
+    code, out = run(capsys, "--adapter", PARTIAL, "--message", "LblRange", "--message", "Announce")
+    assert code == 0 and "PASS for 1 of 2 messages; 1 not tested" in out
+    code, out = run(capsys, "--adapter", PARTIAL, "--require", "all")
+    assert code == 1 and "required but not tested: Announce" in " ".join(out.split())
+    assert run(capsys, "--adapter", PARTIAL, "--require", "Heartbeat", "--require", "LblRange")[0] == 0
+    code, out = run(capsys, "--adapter", PARTIAL, "--require", "Nothing")
+    assert code == 2 and "unknown message(s): Nothing" in out
+
+
+def test_a_codec_that_refuses_everything_passes_nothing(tmp_path, capsys):
+    code, out = run(capsys, "--adapter", REFUSE_ALL, "--message", "LblRange", "--message", "Sms", "--json",
+                    str(tmp_path / "r.json"))
+    doc = json.loads((tmp_path / "r.json").read_text(encoding="utf-8"))
+    assert code == 2 and "nothing could be tested" in out
+    assert not [c for m in doc["messages"] for c in m["cases"] if c["verdict"] == "PASS"]
+    assert doc["headline"] == "INCONCLUSIVE, none of 2 messages tested"
+
+
+def test_refusals_alone_in_a_selection_rest_on_the_base_asked_too(tmp_path, capsys):
+    """Invalid cases selected alone: the valid case each was made from (its base) is asked as well, so that they are
+    judged as the whole run judges them."""
+    code, _ = run(capsys, "--adapter", PARTIAL, "--id", "imc/LblRange/crc/*", "--id", "imc/Sms/crc/*", "--json",
+                  str(tmp_path / "r.json"))
+    doc = json.loads((tmp_path / "r.json").read_text(encoding="utf-8"))
+    verdicts = {m["name"]: {c["verdict"] for c in m["cases"]} for m in doc["messages"]}
+    assert code == 0 and verdicts == {"Sms": {"UNSUPPORTED"}, "LblRange": {"PASS"}}
+
+
+def test_every_invalid_vector_names_the_valid_case_it_was_made_from():
+    from imc_conformance.files import open_corpus
+
+    for suite_name in ("imc", "ros_acomms"):
+        _, cases = open_corpus(suite_name)
+        by_id = {c.id: c for c in cases}
+        invalid = [c for c in cases if "invalid" in c.data.get("tags", ()) and "promoted" not in c.data.get("tags", ())
+                   and c.kind == "vector"]
+        assert invalid
+        for case in invalid:
+            base = by_id.get(case.data.get("base"))
+            assert base is not None and base.group == case.group, case.id
+            assert base.data["expect"] == "valid" or "valid" in base.data["expect"].values(), case.id
+
+
+def test_a_message_whose_failures_are_waived_reads_waived(tmp_path, capsys):
+    waivers = tmp_path / "w.json"
+    waivers.write_text(json.dumps({"waivers": [{"glob": "imc/LblRange/boundary/range/*nan*", "reason": "NaN bits"}]}))
+    adapter = f"{HERE / 'nan_canonical_adapter.py'}:Adapter"
+    code, out = run(capsys, "--adapter", adapter, "--message", "LblRange", "--message", "Heartbeat", "--waivers",
+                    str(waivers), "--json", str(tmp_path / "r.json"))
+    doc = json.loads((tmp_path / "r.json").read_text(encoding="utf-8"))
+    assert code == 0, out
+    assert {m["name"]: m["verdict"] for m in doc["messages"]} == {"Heartbeat": "PASS", "LblRange": "WAIVED"}
+    assert doc["headline"] == "PASS for 1 of 2 messages; 1 waived"
