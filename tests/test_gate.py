@@ -111,3 +111,84 @@ def test_a_message_whose_failures_are_waived_reads_waived(tmp_path, capsys):
     assert code == 0, out
     assert {m["name"]: m["verdict"] for m in doc["messages"]} == {"Heartbeat": "PASS", "LblRange": "WAIVED"}
     assert doc["headline"] == "PASS for 1 of 2 messages; 1 waived"
+
+
+# --- adapter-check on the adapter's own messages ---------------------------------------------------------------------
+
+NEWCOMER = HERE / "newcomer_adapter.py"
+
+
+def newcomer(mode: str) -> list[str]:
+    import shlex
+    import sys
+
+    return ["--adapter-cmd", shlex.join([sys.executable, str(NEWCOMER), mode]), "--timeout", "3"]
+
+
+def adapter_check(capsys, *args) -> tuple[int, str]:
+    capsys.readouterr()
+    code = main(["adapter-check", *args])
+    return code, capsys.readouterr().out
+
+
+def test_a_python_adapter_writing_bare_nan_for_its_own_message_is_named(capsys):
+    """A codec of Heartbeat and LblRange whose adapter writes NaN with json.dumps: the probes reach LblRange (a first
+    pass finds what it reads), and the bare NaN is named with the fix in Python."""
+    code, out = adapter_check(capsys, *newcomer("bare-nan"))
+    assert code == 1, out
+    assert "it reads 2 of 31 messages (Heartbeat, LblRange)" in out
+    assert "MISTAKE 1: a line holds NaN or Infinity, which JSON does not have" in out
+    assert '"range": NaN' in out and "json.dumps writes float('nan')" in out and "allow_nan=False" in out
+    code, out = adapter_check(capsys, *newcomer("bare-nan"), "--message", "Heartbeat")
+    assert code == 0 and "it reads 1 of 1 message (Heartbeat)" in out, out
+
+
+def test_a_rule_the_implementation_names_for_one_kind_of_input_has_two_readings(capsys):
+    """The implementation's transport takes the CRC from the datagram's end: a frame with bytes after it is refused
+    naming crc. The adapter reports that faithfully: both readings, exit 0, the implementation's result a note."""
+    code, out = adapter_check(capsys, *newcomer("crc-at-end"))
+    assert code == 0 and "MISTAKE" not in out, out
+    assert "trailing-bytes: named 'crc'" in out
+    assert "either the implementation's own check refused it under that rule" in out
+    assert "or the adapter names a rule the implementation did not give" in out and "to tell:" in out
+
+
+@pytest.mark.parametrize("mode", ["hang-on-negative-zero", "crash-on-negative-zero"])
+def test_the_implementation_hanging_or_dying_on_an_input_is_its_own_result(capsys, mode):
+    """Issue 49, hostile probe 6: a right adapter over an implementation that hangs (or dies) on a frame holding −0.0,
+    which is among the requests sent in flight together and among the probes: notes, never a mistake."""
+    code, out = adapter_check(capsys, *newcomer(mode))
+    assert code == 0 and "MISTAKE" not in out, out
+    assert "sent again alone" in out and "the implementation hangs or dies on this input" in out
+    assert "requests in flight together, each answered" not in out
+    assert ("TIMEOUT" if mode.startswith("hang") else "CRASH") in out
+
+
+def test_unsupported_for_frames_of_a_message_it_decodes_is_a_mistake(capsys, tmp_path):
+    """Issue 49, hostile probe 7: every refusal answered "unsupported" by an adapter that decodes the valid frames of
+    the same messages: a mistake with its fix; and a run never reads PASS for a message none of whose cases passed."""
+    code, out = adapter_check(capsys, *newcomer("unsupported-refusals"))
+    assert code == 1, out
+    assert 'MISTAKE 1: "unsupported" answered for a frame of a message and byte order the adapter decodes otherwise' in out
+    assert 'answer a frame it refuses {"ok": false' in out
+    capsys.readouterr()
+    code = main(["run", "--no-progress", *newcomer("unsupported-refusals"), "--message", "Announce", "--json",
+                 str(tmp_path / "r.json")])
+    doc = json.loads((tmp_path / "r.json").read_text(encoding="utf-8"))
+    (announce,) = doc["messages"]
+    assert announce["counts"].get("PASS", 0) > 0 and announce["verdict"] == "PASS"  # its valid cases pass
+    assert {c["verdict"] for c in announce["cases"] if c["expect"] == "invalid"} == {"UNSUPPORTED"}
+
+
+def test_a_message_with_no_case_passing_is_not_pass():
+    from imc_conformance.core.results import CaseResult, CheckResult, message_verdict
+    from imc_conformance.core.verdicts import Verdict
+
+    def case(expect, verdict):
+        return CaseResult("imc/X/c", "X", verdict, expect, "seed", [CheckResult("decode-le", verdict, "")])
+
+    # valid cases all unsupported (e.g. every encode answered "unsupported"), an acceptable one implementation-defined
+    assert message_verdict([case("valid", Verdict.UNSUPPORTED), case("acceptable", Verdict.IMPL_DEFINED),
+                            case("invalid", Verdict.UNSUPPORTED)], strict=False) == "UNSUPPORTED"
+    assert message_verdict([case("valid", Verdict.PASS), case("invalid", Verdict.WAIVED)], strict=False) == "WAIVED"
+    assert message_verdict([case("valid", Verdict.PASS), case("invalid", Verdict.UNSUPPORTED)], strict=False) == "PASS"

@@ -319,16 +319,12 @@ def message_verdict(cases: list[CaseResult], strict: bool) -> str:
     if verdicts and verdicts <= set(UNTESTED):
         return "INCONCLUSIVE" if Verdict.INCONCLUSIVE in verdicts else "UNSUPPORTED"
     valid = [c for c in cases if c.expect == "valid"]
-    if valid and not any(tested(c) for c in valid):
+    if valid and all(c.verdict in UNTESTED for c in valid):
         return "INCONCLUSIVE" if any(c.verdict is Verdict.INCONCLUSIVE for c in valid) else "UNSUPPORTED"
     if Verdict.WAIVED in verdicts:
         return "WAIVED"
     return "PASS"
 
-
-def tested(case: CaseResult) -> bool:
-    """Whether a case tested anything: a check of it was answered and judged (not UNSUPPORTED nor INCONCLUSIVE)."""
-    return case.verdict not in UNTESTED or any(k.verdict not in UNTESTED for k in case.checks)
 
 
 def case_dict(c: CaseResult, memo: dict | None = None) -> dict:
