@@ -110,7 +110,7 @@ def test_a_message_whose_failures_are_waived_reads_waived(tmp_path, capsys):
     doc = json.loads((tmp_path / "r.json").read_text(encoding="utf-8"))
     assert code == 0, out
     assert {m["name"]: m["verdict"] for m in doc["messages"]} == {"Heartbeat": "PASS", "LblRange": "WAIVED"}
-    assert doc["headline"] == "PASS for 1 of 2 messages; 1 waived"
+    assert doc["headline"] == "PASS with waivers for all 2 messages; 1 with failures waived"
 
 
 # --- adapter-check on the adapter's own messages ---------------------------------------------------------------------
@@ -192,3 +192,24 @@ def test_a_message_with_no_case_passing_is_not_pass():
                             case("invalid", Verdict.UNSUPPORTED)], strict=False) == "UNSUPPORTED"
     assert message_verdict([case("valid", Verdict.PASS), case("invalid", Verdict.WAIVED)], strict=False) == "WAIVED"
     assert message_verdict([case("valid", Verdict.PASS), case("invalid", Verdict.UNSUPPORTED)], strict=False) == "PASS"
+
+
+def test_a_newcomer_codec_canonicalising_nan_has_a_cause_naming_what_it_wrote(tmp_path, capsys):
+    code, _ = run(capsys, "--adapter", f"{HERE / 'nan_canonical_adapter.py'}:Adapter", "--message", "LblRange",
+                  "--json", str(tmp_path / "r.json"))
+    doc = json.loads((tmp_path / "r.json").read_text(encoding="utf-8"))
+    (cause,) = doc["causes"]
+    assert code == 1 and cause["key"] == "fails/encode+roundtrip/valid"
+    assert cause["title"] == ("encode+roundtrip fails on valid input: class nan-payload or negative-nan; written as "
+                              "'nan'; in LblRange.range")
+
+
+def test_pyimclsts_with_its_waivers_by_cause_reads_waived(tmp_path, capsys):
+    code, out = run(capsys, "--adapter", "pyimclsts", "--waivers", str(HERE / "data" / "pyimclsts-waivers.json"),
+                    "--json", str(tmp_path / "r.json"))
+    doc = json.loads((tmp_path / "r.json").read_text(encoding="utf-8"))
+    assert code == 0, out
+    for m in doc["messages"]:
+        waived = any(c["verdict"] == "WAIVED" for c in m["cases"])
+        assert m["verdict"] == ("WAIVED" if waived else "PASS"), m["name"]
+    assert doc["headline"] == "PASS with waivers for all 31 messages; 31 with failures waived"

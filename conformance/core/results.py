@@ -187,16 +187,17 @@ class RunResult:
         if untested == total:
             return f"{verdict}, none of {_messages(total)} tested"
         if verdict == "PASS":
-            head = (f"PASS for all {_messages(total)}" if counts["PASS"] == total > 1 else
-                    f"PASS for {counts['PASS']} of {_messages(total)}")
-            parts = []
+            passed = counts["PASS"] + counts["WAIVED"]
+            head = ("PASS" + (" with waivers" if counts["WAIVED"] else "") +
+                    (f" for all {_messages(total)}" if passed == total > 1 else f" for {passed} of {_messages(total)}"))
+            parts = [f"{counts['WAIVED']} with failures waived"] if counts["WAIVED"] else []
         elif counts["FAIL"]:
             head = f"{verdict} for {counts['FAIL']} of {_messages(total)}"
             parts = [f"{counts['PASS']} pass{'es' if counts['PASS'] == 1 else ''}"] if counts["PASS"] else []
         else:
             head = f"{verdict}, {counts['PASS']} of {_messages(total)} pass{'es' if counts['PASS'] == 1 else ''}"
             parts = []
-        if counts["WAIVED"]:
+        if counts["WAIVED"] and verdict != "PASS":
             parts.append(f"{counts['WAIVED']} waived")
         if untested:
             parts.append(f"{untested} not tested")

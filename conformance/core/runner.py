@@ -12,7 +12,7 @@ from typing import Callable
 
 from .cases import Case, expectation, passive_id
 from .evidence import Evidence
-from .causes import about, cause_of, group_causes
+from .causes import about, cause_of, described, group_causes
 from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
 from .session import Answer, Job, Session
@@ -160,7 +160,14 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
                 for g in suite.groups if g.name in filed]
     data = {case.id: case.data for case in cases}
-    causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)))
+    read = {case.id: getattr(kinds[case.kind], "differences_in", None) for case in cases}
+
+    def differences(c: CaseResult) -> list:
+        found = read.get(c.id)
+        return [d for k in c.checks if k.verdict is Verdict.FAIL for d in found(data[c.id], edition, k)] if found else []
+
+    causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)),
+                          describe=lambda key, title, members: described(key, title, members, data, differences))
     stale = [w.selector for w in waivers.stale()] if complete and not stopped_at else []
     notes += [stale_note(s) for s in stale]
     return RunResult(suite.name, suite.title, edition, hello["implementation"], adapter, strict, started,

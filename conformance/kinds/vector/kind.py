@@ -310,6 +310,22 @@ class VectorKind:
             return ("shows", capability) if compiled.expect == "valid" else None
         return "needs", capability
 
+    def differences_in(self, case: dict, edition: str, check: CheckResult) -> list[tuple[str, object, object]]:
+        """What a failed check of a valid case got wrong, value by value: (path, expected, answered), as the reference
+        codec reads the frame the implementation wrote (or the message it read, re-encoded); [] where that cannot be
+        read (a refusal, a frame the reference refuses)."""
+        if check.actual is None or "message" not in case or check.check == "describe":
+            return []
+        encoding = check.check.split("-", 1)[1] if "-" in check.check else None
+        if encoding not in self.codec.encodings:
+            return []
+        try:
+            read = self.codec.decode(bytes.fromhex(check.actual), encoding, case, edition)
+            diffs = self.codec.differences(case["message"], read, True, edition)
+        except (ValueError, KeyError, TypeError, AttributeError):
+            return []
+        return [(d.path, d.expected, d.actual) for d in diffs if d.path is not None][:20]
+
     @staticmethod
     def unproven(check: CheckResult, group: str, capability: str) -> CheckResult:
         """A refusal from an implementation shown to read (or encode) no valid case of the group: not tested."""
