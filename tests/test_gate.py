@@ -213,3 +213,22 @@ def test_pyimclsts_with_its_waivers_by_cause_reads_waived(tmp_path, capsys):
         waived = any(c["verdict"] == "WAIVED" for c in m["cases"])
         assert m["verdict"] == ("WAIVED" if waived else "PASS"), m["name"]
     assert doc["headline"] == "PASS with waivers for all 31 messages; 31 with failures waived"
+
+
+def test_the_float_adapter_the_guide_shows_is_the_one_that_passes(capsys):
+    """The adapter guide's Python adapter over LblRange (a float field) is the file in docs/examples; it passes
+    adapter-check and LblRange."""
+    import re
+    import shlex
+    import sys
+
+    docs = HERE.parent / "docs"
+    page = (docs / "how-to" / "adapter.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"^```python\n(.*?)^```$", page, re.MULTILINE | re.DOTALL)
+    program = docs / "examples" / "lblrange_adapter.py"
+    assert program.read_text(encoding="utf-8") in blocks
+    command = ["--adapter-cmd", shlex.join([sys.executable, str(program)])]
+    code, out = adapter_check(capsys, *command)
+    assert code == 0 and "it reads 1 of 31 messages (LblRange)" in out, out
+    code, out = run(capsys, *command, "--message", "LblRange")
+    assert code == 0 and "PASS for 1 of 1 message" in out, out

@@ -237,8 +237,8 @@ def _matcher(kind, expected: dict[int, tuple], edition: str):
 def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, out: Outcome,
            reads: set[tuple[str, str]] = frozenset()) -> None:
     """Every probe through the session, judged by the case kind; each answer that is not right explained. ``reads``:
-    the (group, encoding) the first pass found the implementation reads: "unsupported" for a frame of one of them
-    calls a capability absent that it has.
+    the (group, encoding) the first pass found the implementation reads: "unsupported" for frames of one of them,
+    inputs of several kinds, calls a capability absent that it has.
 
     What either party could have caused is not the adapter's mistake: a probe left unanswered (the implementation hangs
     on it) where the adapter answers others is a note; a rule named that the input does not break is shown with both
@@ -268,14 +268,15 @@ def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, 
     answers = any(answer.kind in ("ok", "rejected") for _, answer in answered)
     float_decodes = []
     misnamed: dict[str, list[tuple[Probe, str, Mistake]]] = {}  # rule named -> the probes it was named for
+    absent: list[tuple[Probe, Mistake]] = []  # "unsupported" for a frame of a group and encoding it reads
     for job, answer in answered:
         probe = by_job[id(job)]
         where = f"{job.request.check} of {probe.case.id}"
         if answer.kind == "unsupported" and job.request.op == "decode" and \
                 (probe.case.group, job.request.encoding) in reads:
-            out.add([Mistake("unsupported-read", f"answered \"unsupported\" ({answer.reason[:120]}) for a "
-                                                 f"{probe.case.group} frame ({job.request.encoding}), a message it "
-                                                 "decodes otherwise", where)])
+            absent.append((probe, Mistake("unsupported-read", f"answered \"unsupported\" ({answer.reason[:120]}) "
+                                                              f"for a {probe.case.group} frame ({job.request.encoding}), "
+                                                              "a message it decodes otherwise", where)))
             continue
         if answer.kind == "timeout" and answers:
             out.findings.append(f"{where}: TIMEOUT: {answer.reason}: the adapter answers other requests, so the "
@@ -303,6 +304,10 @@ def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, 
             errata = f" (erratum {', '.join(explained)})" if explained else ""
             out.findings.append(f"{where}: {result.verdict.value}{errata}: {result.detail}")
     out.decoded_right = bool(float_decodes) and all(float_decodes)
+    if len({probe.teaches for probe, _ in absent}) > 1:  # for inputs of several kinds: refusals called absence
+        out.add([mistake for _, mistake in absent])
+    else:  # one kind of input (e.g. an id it cannot tell from one it does not implement): the implementation may say so
+        out.findings += [f"{m.where}: {m.seen} (a refusal says more)" for _, m in absent]
     for rule, named in misnamed.items():
         if len({probe.teaches for probe, _, _ in named}) > 1:  # one rule for inputs breaking different rules
             out.add([mistake for _, _, mistake in named])
@@ -402,7 +407,7 @@ def _no_header(kind, probe: Probe, request: Request, answer: Answer, edition: st
     where = f"encode of {probe.case.id} with \"header\": {{}}"
     if answer.kind == "unsupported":
         return []
-    if answer.kind in ("crash", "timeout") or answer.reason.startswith(GAVE_UP):
+    if answer.reason.startswith(GAVE_UP):  # the session gave up on a program dying on the probes before it
         out.findings.append(f"{where}: {answer.kind}: {answer.reason}")
         return []
     if answer.kind != "ok":
