@@ -1,15 +1,18 @@
 """Refusals judged on evidence: a refusal shows something only of an implementation shown to do what it refused.
 
 An implementation that cannot read a message refuses every frame of it, the invalid ones too: that refusal is no
-PASS (nor, for a valid frame, a FAIL: the message is not implemented, not tested). A case kind that weighs its answers so has ``evidence(case, edition, request, answer)``, giving
+PASS (nor, for a valid frame, a FAIL: the message is not implemented, not tested). A case kind that weighs its
+answers so has ``capability(case, request)``, what an answer to a request shows or needs (``decode-le``), and
+``evidence(case, edition, request, answer)``, giving
 ``("shows", capability)`` for an answer that shows the implementation has a capability (it decoded a valid frame:
 ``decode-le``), ``("needs", capability)`` for one that counts only from an implementation that has it (a refusal),
 else None; and ``unproven(check, group, capability)``: what the check becomes where nothing showed it (UNSUPPORTED,
 saying why). Capabilities are per group (message, type): a reader of Heartbeat shows nothing of LblRange.
 
-Where the cases run show nothing of a group, the case a refused one was made from (its ``base``), else a valid case
-of its group, is asked once more from the loaded corpus: a selection of invalid cases alone is judged as the whole
-run would judge them.
+Where no valid case of the selection can show what a refusal of it may rest on, the case a refused one was made from
+(its ``base``), else a valid case of its group, is asked too from the loaded corpus, before the selection's own jobs:
+a selection of invalid cases alone (a shard, a rerun of what failed, an interrupted run) is judged as the whole run
+would judge them.
 """
 
 from __future__ import annotations
@@ -32,30 +35,26 @@ class Evidence:
         self.cases = {c.id: c for c in cases if c.kind in self.weighs}
         self.shown: set[tuple[str, str]] = set()  # (group, capability)
         self.needs: list[tuple[Case, CheckResult, str]] = []  # a refusal judged, and the capability it rests on
-        self.asked = 0  # cases asked of the corpus for evidence the selection did not give
+        self.probes: dict[int, Case] = {}  # id() of each job asked for evidence alone -> the case it is of
 
-    def answered(self, job: Job, answer, judged: CheckResult) -> None:
-        case = self.cases.get(job.case_id)
-        if case is None:
-            return
-        said = self.weighs[case.kind].evidence(case.data, self.edition, job.request, answer)
-        if said is None:
-            return
-        if said[0] == "shows":
-            self.shown.add((case.group, said[1]))
-        elif judged.verdict in COUNTED:
-            self.needs.append((case, judged, said[1]))
-
-    def missing(self) -> dict[tuple[str, str], Case]:
-        """(group, capability) -> a refused case resting on it, for what nothing showed."""
-        return {(c.group, cap): c for c, _, cap in self.needs if (c.group, cap) not in self.shown}
-
-    def probe(self, session, corpus: list[Case], emits: frozenset) -> None:
-        """Ask the corpus's case each missing capability can be shown by: the refused case's base, else the first
-        valid case of its group with such a check."""
-        missing = self.missing()
+    def plan(self, corpus: list[Case], plans: dict, emits: frozenset) -> list[Job]:
+        """The jobs asking, for each (group, capability) a refusal in the selection may rest on and none of its valid
+        cases can show, the corpus's case that can show it: the base the refused cases name, else the first valid case
+        of the group with such a request. Asked before the selection's own jobs (an interrupted run has them)."""
+        could_show, could_need = set(), {}
+        for case in self.cases.values():
+            kind = self.weighs[case.kind]
+            valid = expectation(case.data, self.edition) == "valid"
+            for request in plans.get(case.id, ()):
+                capability = kind.capability(case.data, request)
+                if capability is None:
+                    continue
+                could_need.setdefault((case.group, capability), case)
+                if valid:
+                    could_show.add((case.group, capability))
+        missing = {key: case for key, case in could_need.items() if key not in could_show}
         if not missing or not corpus:
-            return
+            return []
         by_id = {c.id: c for c in corpus}
         valid: dict[str, list[Case]] = {}
         for c in corpus:
@@ -68,17 +67,26 @@ class Evidence:
                 if expectation(candidate.data, self.edition) != "valid":
                     continue
                 kind = self.weighs[candidate.kind]
-                request = next((r for r in kind.plan(candidate.data, self.edition, emits, {}) if r.check == capability),
-                               None)
+                request = next((r for r in kind.plan(candidate.data, self.edition, emits, {})
+                                if kind.capability(candidate.data, r) == capability), None)
                 if request is not None:
                     jobs.append(Job(self.suite.name, candidate.id, request))
+                    self.probes[id(jobs[-1])] = candidate
                     break
-        self.asked = len(jobs)
-        for job, answer in session.run(jobs):
-            case = by_id[job.case_id]
-            said = self.weighs[case.kind].evidence(case.data, self.edition, job.request, answer)
-            if said is not None and said[0] == "shows":
-                self.shown.add((case.group, said[1]))
+        return jobs
+
+    def answered(self, job: Job, answer, judged: CheckResult | None = None) -> None:
+        """Note what an answer shows (a job of the selection, judged ``judged``, or one asked for evidence alone)."""
+        case = self.cases.get(job.case_id) if judged is not None else self.probes.get(id(job))
+        if case is None:
+            return
+        said = self.weighs[case.kind].evidence(case.data, self.edition, job.request, answer)
+        if said is None:
+            return
+        if said[0] == "shows":
+            self.shown.add((case.group, said[1]))
+        elif judged is not None and judged.verdict in COUNTED:
+            self.needs.append((case, judged, said[1]))
 
     def review(self, found: dict[str, list[CheckResult]]) -> None:
         """Replace, in each case's checks (``found``, by case id), every refusal resting on what nothing showed."""

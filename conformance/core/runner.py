@@ -115,9 +115,13 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
             if job.request.op == "skip" and not stopped_at:
                 judge(job, Answer("skipped", reason=job.request.params.get("reason", "")))
         live = [job for job in jobs if job.request.op != "skip"]
+        asked = weigh.plan(corpus or (), plans, emits) if weigh is not None and live else []
         done = 0
-        answers = session.run(live if not stopped_at else [])
+        answers = session.run(asked + live if not stopped_at else [])
         for done, (job, answer) in enumerate(answers, 1):
+            if asked and id(job) in weigh.probes:
+                weigh.answered(job, answer)
+                continue
             judge(job, answer)
             if progress and not done % PROGRESS_EVERY:
                 progress(done)
@@ -135,8 +139,6 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         notes.insert(0, (f"stopped at the first failing case, {stopped_at[0]}" if complete else "interrupted")
                      + f": {len(cases)} of {len(plans)} cases were done; the others are not in this result")
     if weigh is not None:
-        if complete and not stopped_at:
-            weigh.probe(session, corpus or (), emits)
         weigh.review({case_id: found for case_id, (_, _, found) in judges.items()})
     untested, why = hello_gaps(suite, cases, edition, emits, plans)
     notes += why + list(getattr(session, "notes", ()))

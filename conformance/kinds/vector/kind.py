@@ -305,7 +305,7 @@ class VectorKind:
         if (kind != "ok" and kind != "rejected") or request.op == "describe":
             return None
         compiled = request.context if request.context is not None else self.compiled(case, edition)
-        capability = f"{'encode' if request.op == 'encode' else 'decode'}-{request.encoding}"
+        capability = self.capability(case, request)
         if kind == "ok":
             return ("shows", capability) if compiled.expect == "valid" else None
         return "needs", capability
@@ -325,6 +325,14 @@ class VectorKind:
         except (ValueError, KeyError, TypeError, AttributeError):
             return []
         return [(d.path, d.expected, d.actual) for d in diffs if d.path is not None][:20]
+
+    @staticmethod
+    def capability(case: dict, request: Request) -> str | None:
+        """What an answer to ``request`` shows (answered, for a valid case) or needs (a refusal): ``decode-<encoding>``
+        (a roundtrip too) or ``encode-<encoding>``; None for a description."""
+        if request.op == "describe":
+            return None
+        return f"{'encode' if request.op == 'encode' else 'decode'}-{request.encoding}"
 
     @staticmethod
     def unproven(check: CheckResult, group: str, capability: str) -> CheckResult:
