@@ -232,3 +232,12 @@ def test_the_float_adapter_the_guide_shows_is_the_one_that_passes(capsys):
     assert code == 0 and "it reads 1 of 31 messages (LblRange)" in out, out
     code, out = run(capsys, *command, "--message", "LblRange")
     assert code == 0 and "PASS for 1 of 1 message" in out, out
+
+
+@pytest.mark.parametrize("expected, actual, code", [
+    (2 ** 63 - 1, float(2 ** 63), "big-int"), (2 ** 63 - 1, 2 ** 63, "big-int"), (2 ** 63 - 1, 2 ** 63 - 1, None),
+    (2 ** 63 - 1, 5, None), (7, 7.0, None)])
+def test_a_large_integer_rounded_through_a_double_is_told(expected, actual, code):
+    from imc_conformance.adaptercheck.mistakes import value_mistake
+
+    assert value_mistake(expected, actual) == code

@@ -157,7 +157,7 @@ class Mistake:
 def value_mistake(expected, actual) -> str | None:
     """The code of a classic writer's mistake that turns ``expected`` (a decoded form's value) into ``actual``, or
     None: −0.0 as 0, an fp32 NaN widened or quieted or written in wire order, a NaN's bits lost, an infinity or a float
-    with too few digits."""
+    with too few digits, an integer beyond 2^53 rounded through a double."""
     if isinstance(expected, float) and expected == 0 and math.copysign(1.0, expected) < 0:
         return "negative-zero" if _number(actual) and actual == 0 and math.copysign(1.0, actual) > 0 else None
     if isinstance(expected, str) and expected.startswith("nan:"):
@@ -172,6 +172,9 @@ def value_mistake(expected, actual) -> str | None:
                 return "nan-bytes"
             return None
         return "nan-word"
+    if isinstance(expected, int) and not isinstance(expected, bool) and abs(expected) >= 2 ** 53:
+        return "big-int" if _number(actual) and actual != expected and abs(actual - expected) <= abs(expected) * 1e-15 \
+            else None
     if expected in ("inf", "-inf"):
         return "inf-word" if actual != expected else None
     if isinstance(expected, float) and math.isfinite(expected) and _number(actual) and actual != expected:
