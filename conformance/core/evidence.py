@@ -7,7 +7,10 @@ answers so has ``capability(case, request)``, what an answer to a request shows 
 ``("shows", capability)`` for an answer that shows the implementation has a capability (it decoded a valid frame:
 ``decode-le``), ``("needs", capability)`` for one that counts only from an implementation that has it (a refusal),
 else None; and ``unproven(check, group, capability)``: what the check becomes where nothing showed it (UNSUPPORTED,
-saying why). Capabilities are per group (message, type): a reader of Heartbeat shows nothing of LblRange.
+saying why). Capabilities are per group (message, type): a reader of Heartbeat shows nothing of LblRange. A refusal
+of a valid input needs ``ANY``: an implementation that reads or writes anything of the group and refuses a valid frame
+of it fails that case (it reads little-endian frames and refuses every big-endian one: a defect); one that does
+nothing of the group does not implement it.
 
 Where no valid case of the selection can show what a refusal of it may rest on, the case a refused one was made from
 (its ``base``), else a valid case of its group, is asked too from the loaded corpus, before the selection's own jobs:
@@ -22,6 +25,7 @@ from .results import CheckResult
 from .session import Job
 from .verdicts import Verdict
 
+ANY = "any"  # the capability a refusal of a valid input rests on: the implementation does anything of the group at all
 # what a refusal may be judged, given evidence (a FAIL: a valid frame refused, or an outcome not permitted)
 COUNTED = (Verdict.PASS, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.FAIL)
 
@@ -49,9 +53,10 @@ class Evidence:
                 capability = kind.capability(case.data, request)
                 if capability is None:
                     continue
-                could_need.setdefault((case.group, capability), case)
-                if valid:
+                if valid:  # it may show the capability, and (ANY) what a refusal of it rests on
                     could_show.add((case.group, capability))
+                else:
+                    could_need.setdefault((case.group, capability), case)
         missing = {key: case for key, case in could_need.items() if key not in could_show}
         if not missing or not corpus:
             return []
@@ -85,6 +90,7 @@ class Evidence:
             return
         if said[0] == "shows":
             self.shown.add((case.group, said[1]))
+            self.shown.add((case.group, ANY))
         elif judged is not None and judged.verdict in COUNTED:
             self.needs.append((case, judged, said[1]))
 

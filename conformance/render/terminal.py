@@ -90,7 +90,8 @@ def print_result(result: RunResult, console: Console) -> None:
     summary = ", ".join(f"{n} {v}" for v, n in result.summary.items())
     explained = sum(1 for c in shown if c.errata)
     errata = "1 failure is a documented erratum" if explained == 1 else f"{explained} failures are documented errata"
+    if result.messages:  # the headline, then the count of cases (the last line)
+        colour = {"PASS": "green", "FAIL": "red"}.get(result.overall(), "yellow")
+        console.print(f"[bold {colour}]{safe(result.headline())}[/]")
     console.print(f"{counted(len(result.cases), 'case')} in {result.duration:.2f} s" + (f": {summary}" if summary else "")
                   + (f" ({errata})" if explained else ""))
-    colour = {"PASS": "green", "FAIL": "red"}.get(result.overall(), "yellow")
-    console.print(f"[bold {colour}]{safe(result.headline())}[/]")

@@ -26,6 +26,7 @@ from typing import Protocol
 import orjson
 
 from ...core.cases import expectation
+from ...core.evidence import ANY
 from ...core.results import ByteDiff, CheckResult
 from ...core.session import Answer, Request
 from ...core.verdicts import Verdict
@@ -299,8 +300,8 @@ class VectorKind:
     def evidence(self, case: dict, edition: str, request: Request, answer: Answer) -> tuple[str, str] | None:
         """What an answer shows of the implementation (core.evidence): a valid case answered shows that it reads
         (``decode-<encoding>``, a roundtrip too) or encodes (``encode-<encoding>``) the case's group in that encoding;
-        a refusal (of any case: a reader of no valid frame refuses the valid ones too) counts only from an
-        implementation that does."""
+        a refusal of an invalid or acceptable case counts only from an implementation that does; a refusal of a valid
+        one only from an implementation that does anything of the group (``ANY``: else it does not implement it)."""
         kind = answer.kind
         if (kind != "ok" and kind != "rejected") or request.op == "describe":
             return None
@@ -308,7 +309,7 @@ class VectorKind:
         capability = self.capability(case, request)
         if kind == "ok":
             return ("shows", capability) if compiled.expect == "valid" else None
-        return "needs", capability
+        return "needs", ANY if compiled.expect == "valid" else capability
 
     def differences_in(self, case: dict, edition: str, check: CheckResult) -> list[tuple[str, object, object]]:
         """What a failed check of a valid case got wrong, value by value: (path, expected, answered), as the reference
@@ -337,10 +338,12 @@ class VectorKind:
     @staticmethod
     def unproven(check: CheckResult, group: str, capability: str) -> CheckResult:
         """A refusal from an implementation shown to read (or encode) no valid case of the group: not tested."""
-        op, encoding = capability.split("-", 1)
-        did = f"reads no valid {group} frame" if op == "decode" else f"encodes no valid {group} message"
+        op, _, encoding = capability.partition("-")
+        did = (f"reads no valid {group} frame ({encoding})" if op == "decode" else
+               f"encodes no valid {group} message ({encoding})" if op == "encode" else
+               f"neither reads nor encodes any valid {group} case: it does not implement {group}")
         return CheckResult(check.check, Verdict.UNSUPPORTED,
-                           f"not tested: the implementation {did} ({encoding}), so its refusal shows nothing "
+                           f"not tested: the implementation {did}, so its refusal shows nothing "
                            f"(it answered: {check.detail})", note=check.note)
 
     def failure(self, case: dict, edition: str, request: Request, detail: str, expected: bytes, actual: bytes | None,
