@@ -82,6 +82,8 @@ class Evidence:
 
     def answered(self, job: Job, answer, judged: CheckResult | None = None) -> None:
         """Note what an answer shows (a job of the selection, judged ``judged``, or one asked for evidence alone)."""
+        if answer.kind != "ok" and answer.kind != "rejected":  # nothing shown, no refusal: the common failures
+            return
         case = self.cases.get(job.case_id) if judged is not None else self.probes.get(id(job))
         if case is None:
             return
