@@ -142,17 +142,19 @@ def _line_by_line(inner, suite, kind, probes: list[Probe], edition: str, timeout
         requests, expected = _decodes(kind, probes if vectors else [], edition, first=wire.UNKNOWN_OP_ID + 1)
         same = _matcher(kind, expected, edition)
         if requests and not line.ended:
-            found = wire.together(line, requests, same, batch=False)
+            found, unanswered = wire.together(line, requests, same, batch=False)
             noted = len(out.findings)
-            found, line, channel = _unanswered_alone(inner, suite, line, channel, requests, found, timeout, out)
+            found, line, channel = _unanswered_alone(inner, suite, line, channel, requests, unanswered, found,
+                                                     timeout, out)
             out.add(found)
             if not found and len(out.findings) == noted:
                 out.passed.append(f"{len(requests)} requests in flight together, each answered with its own id")
         if requests and info.get("batch") is True and not line.ended:
             requests, expected = _decodes(kind, probes, edition, first=max(requests) + 1)
-            found = wire.together(line, requests, _matcher(kind, expected, edition), batch=True)
+            found, unanswered = wire.together(line, requests, _matcher(kind, expected, edition), batch=True)
             noted = len(out.findings)
-            found, line, channel = _unanswered_alone(inner, suite, line, channel, requests, found, timeout, out)
+            found, line, channel = _unanswered_alone(inner, suite, line, channel, requests, unanswered, found,
+                                                     timeout, out)
             out.add(found)
             inner.batch = not found  # the probes then go one a line, so that each is judged on its own
             if not found and len(out.findings) == noted:
@@ -166,8 +168,8 @@ def _line_by_line(inner, suite, kind, probes: list[Probe], edition: str, timeout
     return True
 
 
-def _unanswered_alone(inner, suite, line, channel, requests: dict[int, dict], found: list[Mistake], timeout: float,
-                      out: Outcome):
+def _unanswered_alone(inner, suite, line, channel, requests: dict[int, dict], unanswered: list[int],
+                      found: list[Mistake], timeout: float, out: Outcome):
     """Requests sent together and not all answered: each unanswered one sent again alone, in order, to a fresh
     program. One unanswered alone too explains the rest (a program answering in order waits on it): the
     implementation hangs or dies on that input, its own result (a note); all answered alone, the adapter does not
@@ -175,33 +177,32 @@ def _unanswered_alone(inner, suite, line, channel, requests: dict[int, dict], fo
     missing = [m for m in found if m.code in ("pipelining", "batch-unread")]
     if not missing:
         return found, line, channel
-    unanswered = [i for i in requests if f"{i}" in missing[0].seen.split("no answer to ", 1)[-1].split(", ")]
     channel.stop(kill=True)
     for ident in unanswered:
-        channel = inner.open_channel()
-        line = wire.Line(channel, timeout)
-        info, _ = wire.hello(line, suite.name, suite.encoding_param + "s", suite.encodings, lambda: inner.stderr,
-                             inner.hello_timeout)
+        channel, line, greeted = _greeted(inner, suite, timeout)
         answered = {}
-        if info is not None:
+        if greeted:
             line.channel.send({"id": ident, **requests[ident]})
             answered, _ = line.collect({ident}, "alone", arrays=False)
-        if info is not None and ident not in answered:
+        channel.stop(kill=True)
+        if greeted and ident not in answered:
             status = "it died" if line.ended else f"no answer within {timeout:g} s"
             out.findings.append(f"request {ident} of those in flight ({requests[ident]['op']} of "
                                 f"{requests[ident].get('frame', '')[:48]}…), sent again alone: {status}: the "
                                 "implementation hangs or dies on this input, and the others waited behind it")
-            channel.stop(kill=True)
-            channel = inner.open_channel()
-            line = wire.Line(channel, timeout)
-            wire.hello(line, suite.name, suite.encoding_param + "s", suite.encodings, lambda: inner.stderr,
-                       inner.hello_timeout)
-            return [m for m in found if m not in missing], line, channel
-        channel.stop(kill=True)
+            found = [m for m in found if m not in missing]
+            break
+    channel, line, _ = _greeted(inner, suite, timeout)
+    return found, line, channel
+
+
+def _greeted(inner, suite, timeout: float):
+    """A fresh program of the adapter, greeted: (channel, line, whether it answered hello)."""
     channel = inner.open_channel()
     line = wire.Line(channel, timeout)
-    wire.hello(line, suite.name, suite.encoding_param + "s", suite.encodings, lambda: inner.stderr, inner.hello_timeout)
-    return found, line, channel
+    info, _ = wire.hello(line, suite.name, suite.encoding_param + "s", suite.encodings, lambda: inner.stderr,
+                         inner.hello_timeout)
+    return channel, line, info is not None
 
 
 def _decodes(kind, probes: list[Probe], edition: str, first: int) -> tuple[dict[int, dict], dict[int, tuple]]:
