@@ -2,9 +2,10 @@
 # The steps of the composite action (action.yml in the repository's root), also run by .ci/run on the corpus.
 #   action.sh install   a virtual environment at $IMC_VENV with the suite from $IMC_SOURCE (a folder or a wheel) and
 #                       the extras $IMC_EXTRAS (comma-separated: imcpy, pyimclsts, ros); its bin/ put on $GITHUB_PATH
-#   action.sh run       imc-conformance run with $IMC_ADAPTER_CMD or $IMC_ADAPTER, $IMC_SUITE, $IMC_WAIVERS and the
-#                       options in $IMC_ARGS (split on any whitespace, newlines included, never by a shell;
-#                       quotes and backslashes refused); JSON, JUnit and HTML reports written
+#   action.sh run       imc-conformance run with $IMC_ADAPTER_CMD or $IMC_ADAPTER, $IMC_SUITE, $IMC_WAIVERS, each message
+#                       of $IMC_REQUIRE as --require (blank-separated), and the options in $IMC_ARGS (split on
+#                       any whitespace, newlines included, never by a shell; quotes and backslashes refused);
+#                       JSON, JUnit and HTML reports written
 #                       to $IMC_JSON, $IMC_JUNIT, $IMC_HTML; the Markdown summary appended to $GITHUB_STEP_SUMMARY when
 #                       set; exits as the run did (0 pass, 1 a failure, 2 nothing could be judged) and writes that code
 #                       to $GITHUB_OUTPUT as exit-code.
@@ -27,6 +28,7 @@ run)
   if [ -n "${IMC_ADAPTER:-}" ]; then argv+=(--adapter "$IMC_ADAPTER"); fi
   if [ -n "${IMC_SUITE:-}" ]; then argv+=(--suite "$IMC_SUITE"); fi
   if [ -n "${IMC_WAIVERS:-}" ]; then argv+=(--waivers "$IMC_WAIVERS"); fi
+  if [ -n "${IMC_REQUIRE:-}" ]; then read -r -a required <<< "$IMC_REQUIRE"; for m in "${required[@]}"; do argv+=(--require "$m"); done; fi
   if [ -n "${IMC_ARGS:-}" ]; then
     case "$IMC_ARGS" in
     *[\"\'\\]*)

@@ -69,7 +69,7 @@ def run_selected(state: dict, cases) -> dict:
     session = CallTarget(LibrarySession(state["adapter"], state["spec"]))
     try:
         result = run_cases(session, state["suite"], cases, edition=state["edition"], adapter=state["spec"],
-                           strict=state["strict"])
+                           strict=state["strict"], corpus=state["corpus"])
     finally:
         session.close()
     return {c.id: c for c in result.cases}
@@ -93,7 +93,7 @@ def pytest_collection_modifyitems(session, config, items):
     if edition not in suite.editions:
         raise pytest.UsageError(f"unknown edition {edition!r} of the suite {suite.name!r}")
     config.stash[_STATE] = {"adapter": adapter, "spec": spec, "suite": suite, "edition": edition,
-                            "strict": config.getoption("conformance_strict")}
+                            "strict": config.getoption("conformance_strict"), "corpus": everything}
     for case in select_cases(everything, edition, config.getoption("conformance_message"),
                              config.getoption("conformance_id")):
         items.append(ConformanceCase.from_parent(session, name=case.id, case=case))

@@ -11,9 +11,9 @@ from imc_conformance.sessions.library import LibrarySession
 
 def verdicts(adapter_or_session, cases, edition: str, suite_name: str = "imc", strict: bool = False) -> dict:
     """Case id -> (case verdict, check results) for every case of ``cases`` that had a check to make."""
-    suite, _ = open_corpus(suite_name)
+    suite, corpus = open_corpus(suite_name)
     session = adapter_or_session if hasattr(adapter_or_session, "run") else LibrarySession(adapter_or_session, "test")
-    result = run_cases(session, suite, cases, edition=edition, adapter="test", strict=strict)
+    result = run_cases(session, suite, cases, edition=edition, adapter="test", strict=strict, corpus=corpus)
     return {c.id: (c.verdict, c.checks) for c in result.cases if c.checks}
 
 

@@ -62,8 +62,19 @@ def test_a_seeded_bug_in_values_is_one_cause_across_messages(suite, cases, defs)
     result = run_cases(LibrarySession(CanonicalNan(defs), "canonical-nan"), suite, cases, edition="imc-5.4.30",
                        adapter="canonical-nan")
     (cause,) = result.cause_groups()
-    assert (cause.key, cause.title) == ("fails/decode+roundtrip/valid", "decode+roundtrip fails on valid input")
+    assert cause.key == "fails/decode+roundtrip/valid"  # the key stays what waivers by cause name
+    # the title says what differs: the value classes, the one value answered in their place, the fields
+    assert cause.title.startswith("decode+roundtrip fails on valid input: class nan-payload or negative-nan; "
+                                  "answered as 'nan'; in ")
+    assert "fields)" in cause.title
     assert len(cause.messages) > 5 and all("nan" in case_id.rsplit("/", 1)[1] for case_id in cause.cases)
+
+
+def test_a_cause_of_refusals_names_the_types_its_cases_hold_and_the_words_of_the_refusal(pyimclsts_run):
+    """pyimclsts refuses valid frames whose HistoricData list holds a RemoteCommand: the title says so."""
+    cause = next(c for c in pyimclsts_run.cause_groups() if c.key.startswith("fails/"))
+    assert "holding HistoricData" in cause.title, cause.title
+    assert "refused: pyimclsts.network.unpack: ValueError: Cannot have" in cause.title, cause.title
 
 
 def test_every_report_opens_with_the_causes(pyimclsts_run):

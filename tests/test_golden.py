@@ -2,7 +2,7 @@
 
 The golden files were written by the runner before the core became generic (list output for both editions, to
 which the scenarios were appended when that case kind came) and by this one (a whole JSON result, whose format
-became 3 with the scenarios, 5 with its provenance); a change to any of them must be deliberate: regenerate and review.
+became 3 with the scenarios, 5 with its provenance, 6 with its headline); a change to any of them must be deliberate: regenerate and review.
 """
 
 from __future__ import annotations

@@ -412,7 +412,7 @@ def test_14_a_merge_refuses_shards_of_different_selections_corpora_waivers_or_no
     capsys.readouterr()
     assert main(["report", "--merge", str(first), str(second)]) == 2
     one_line(capsys.readouterr().err, "cannot merge: the shards differ in their selection: {'message': ['LblRange', "
-                                      "'Heartbeat'], 'id': [], 'tag': [], 'cases': 189} and {'message': ['Heartbeat']")
+                                      "'Heartbeat'], 'id': [], 'tag': [], 'cases': 190} and {'message': ['Heartbeat']")
     right = shard(tmp_path, 2, 2, "--message", "LblRange", "--message", "Heartbeat")
     for key, value in (("corpus", "sha256:" + "0" * 64), ("errata", None), ("tool", "imc-conformance 0.0.1"),
                        ("waivers", {"file": "w.json", "sha256": "0" * 64, "waivers": 1})):
@@ -425,6 +425,7 @@ def test_14_a_merge_refuses_shards_of_different_selections_corpora_waivers_or_no
     old = json.loads(right.read_text())
     old.pop("provenance")
     old.pop("causes", None)
+    old.pop("headline")
     old["format"] = "imc-conformance-result/4"
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert main(["report", "--merge", str(first), str(tmp_path / "old.json")]) == 2
@@ -432,7 +433,7 @@ def test_14_a_merge_refuses_shards_of_different_selections_corpora_waivers_or_no
     merged = tmp_path / "merged.json"
     assert main(["report", "--merge", str(first), str(right), "--json", str(merged)]) == 0
     made = json.loads(merged.read_text())["provenance"]
-    assert made["selection"]["cases"] == 189 and made["command"][:3] == ["imc-conformance", "report", "--merge"]
+    assert made["selection"]["cases"] == 190 and made["command"][:3] == ["imc-conformance", "report", "--merge"]
 
 
 def test_15_an_empty_shard_is_a_result_of_no_case_and_merges(tmp_path, capsys):
@@ -474,7 +475,7 @@ def test_16_report_and_matrix_refuse_a_result_whose_message_verdict_contradicts_
         assert main(argv) == 2
         one_line(capsys.readouterr().err, "$.messages[0].verdict: PASS for TextMessage, whose cases give FAIL: a "
                                           "result that contradicts itself is not read")
-    old = {k: v for k, v in doc.items() if k not in ("provenance", "shard", "causes")} | {"format": "imc-conformance-result/3"}
+    old = {k: v for k, v in doc.items() if k not in ("provenance", "shard", "causes", "headline")} | {"format": "imc-conformance-result/3"}
     (tmp_path / "old.json").write_text(json.dumps(old))  # written before today's message verdicts: derived again
     assert main(["report", str(tmp_path / "old.json"), "--json", str(tmp_path / "again.json")]) == 1
     again = json.loads((tmp_path / "again.json").read_text())

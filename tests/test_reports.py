@@ -139,8 +139,12 @@ def test_json_validates_and_round_trips(which, request):
 
 
 def _older(doc: dict, version: int) -> dict:
-    """``doc`` as formats 1 to 4 wrote it: before provenance and causes; formats 1 to 3: before shards; formats 1 and 2:
-    IMC only, numeric message ids, no title (format 1: no completeness, incidents or check kinds)."""
+    """``doc`` as formats 1 to 5 wrote it: before its headline and required messages; formats 1 to 4: before provenance
+    and causes; formats 1 to 3: before shards; formats 1 and 2: IMC only, numeric message ids, no title (format 1: no
+    completeness, incidents or check kinds)."""
+    doc = {k: v for k, v in doc.items() if k not in ("headline", "required")}
+    if version == 5:
+        return doc | {"format": "imc-conformance-result/5"}
     doc = {k: v for k, v in doc.items() if k not in ("provenance", "causes")}
     if version == 4:
         return doc | {"format": "imc-conformance-result/4"}
@@ -155,7 +159,7 @@ def _older(doc: dict, version: int) -> dict:
     return old
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 4])
+@pytest.mark.parametrize("version", [1, 2, 3, 4, 5])
 def test_report_reads_the_older_formats(version, pyimclsts_result, tmp_path):
     """An older result has no causes: they are grouped on reading from what it keeps (the rule, the id), the same
     cases in the same groups where the run's groups rest on the rule."""
@@ -258,7 +262,7 @@ def columns(line: str) -> int:
 
 def test_markdown_summary(pyimclsts_result):
     text = render_markdown(pyimclsts_result)
-    assert text.splitlines()[0].startswith("## ❌ IMC conformance: FAIL — pyimclsts 0.1.2.1")
+    assert text.splitlines()[0].startswith("## ❌ IMC conformance: FAIL for 3 of 3 messages — pyimclsts 0.1.2.1")
     assert "| Message | Verdict | PASS | FAIL | IMPL_DEFINED |" in text
     announce = next(m for m in pyimclsts_result.messages if m.name == "Announce")
     counts = {v: sum(c.verdict.value == v for c in announce.cases) for v in ("PASS", "FAIL", "IMPL_DEFINED")}

@@ -2,14 +2,20 @@
 contract explained with its fix. Suite-generic: the probes are the suite's own byte vectors (``probes``), judged by
 its case kind as a run judges them (the one verdict policy); what adapter-check adds is why an answer is wrong.
 
-An implementation's own failure on a probe (it accepts a frame with a wrong CRC, it decodes a value otherwise) is a
-finding, listed but not a mistake of the adapter; a failure the implementation's errata explain is one too. A value
-answered the way a JSON writer typically gets it wrong (−0.0 as 0, an fp32 NaN widened) is a mistake, whose fix says
-so if the implementation itself is to blame.
+A first pass decodes one valid frame of every group, to learn what the implementation reads; the probes then go to
+those groups, so that a mistake in writing the values the adapter's own messages hold is seen.
+
+An implementation's own failure on a probe (it accepts a frame with a wrong CRC, it decodes a value otherwise, it
+hangs or dies on an input) is a finding, listed but not a mistake of the adapter; a failure the implementation's
+errata explain is one too. A value answered the way a JSON writer typically gets it wrong (−0.0 as 0, an fp32 NaN
+widened, a bare NaN) is a mistake, whose fix says so if the implementation itself is to blame. Where either could be
+the cause (a frame holding another value than the request gave, a rule named that the input does not break) both
+readings are shown, with how to tell them apart.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from ..core.hello import check_hello
@@ -18,9 +24,11 @@ from ..core.verdicts import Verdict
 from ..sessions.subprocess import SubprocessSession
 from . import wire
 from .mistakes import Mistake, value_mistake
-from .probes import FEATURES, Probe, choose
+from .probes import FEATURES, Probe, choose, first_frames
 
 FINE = (Verdict.PASS, Verdict.IMPL_DEFINED, Verdict.UNSUPPORTED)
+GAVE_UP = "adapter keeps crashing"  # how a session says it gave up restarting a program that dies or hangs on each input
+BARE_CONSTANT = re.compile(r"[:\[,]\s*-?(?:NaN|Infinity)\s*[,\]}]")  # a JSON writer's bare NaN or Infinity, as a value
 IN_FLIGHT = 3  # requests sent together to see that each is answered with its own id
 NO_HEADER = "encode-no-header"
 
@@ -38,6 +46,9 @@ class Outcome:
     # adapter's mistake, which the frame alone cannot tell (each: where, what the frame holds); shown with both readings
     either: list[str] = field(default_factory=list)
     decoded_right: bool = False  # the same float probes were decoded right (the adapter writes those values right)
+    reads: list[str] = field(default_factory=list)  # the groups a first pass found the implementation reads
+    # rule mismatches the implementation's own check may explain (each: where, what was named): shown with both readings
+    rules: list[str] = field(default_factory=list)
     nothing: bool = False  # every probe was answered "unsupported": the adapter implements nothing yet
 
     def add(self, found) -> None:
@@ -72,10 +83,38 @@ def check(session, suite, cases: list, edition: str, timeout: float) -> Outcome:
     if not isinstance(inner, SubprocessSession):
         out.passed.append(f"hello: {info['implementation']!r}, suites {info['suites']}, emits {info['emits']}")
     if kind.name in info["kinds"]:
-        _probe(session, suite, kind, probes, edition, info, out)
+        reads = _reach(session, suite, kind, cases, edition, out)
+        if reads is None:
+            return out
+        groups = {group for group, _ in reads}
+        _probe(session, suite, kind, choose(cases, edition, kind.codec.rules, groups or None), edition, info, out,
+               reads)
     else:
         out.passed.append(f"no probe sent: the adapter runs {' and '.join(info['kinds'])} cases, not {kind.name} ones")
     return out
+
+
+def _reach(session, suite, kind, cases: list, edition: str, out: Outcome) -> set[tuple[str, str]] | None:
+    """A first pass: one valid frame of each group decoded in each encoding, to learn what the implementation reads
+    ((group, encoding) answered with a message); None when the adapter could not be reached."""
+    jobs = []
+    for case in first_frames(cases, edition):
+        jobs += [Job(suite.name, case.id, r) for r in kind.plan(case.data, edition, frozenset())
+                 if r.op == "decode"]
+    groups = {case.id: case.group for case in cases}
+    try:
+        answered = list(session.run(jobs))
+    except AdapterStartError as exc:
+        out.add([Mistake("no-start", str(exc), "the first pass")])
+        return None
+    reads = {(groups[job.case_id], job.request.encoding) for job, answer in answered if answer.kind == "ok"}
+    out.reads = sorted({group for group, _ in reads})
+    if reads:
+        shown = ", ".join(out.reads[:8]) + (f" and {len(out.reads) - 8} more" if len(out.reads) > 8 else "")
+        total = len(set(groups.values()))
+        out.passed.append(f"a first pass of {len(jobs)} decodes: it reads {len(out.reads)} of {total} "
+                          f"{suite.group_label}{'s' if total != 1 else ''} ({shown}); the probes go to those")
+    return reads
 
 
 def _line_by_line(inner, suite, kind, probes: list[Probe], edition: str, timeout: float, out: Outcome) -> bool:
@@ -103,16 +142,22 @@ def _line_by_line(inner, suite, kind, probes: list[Probe], edition: str, timeout
         requests, expected = _decodes(kind, probes if vectors else [], edition, first=wire.UNKNOWN_OP_ID + 1)
         same = _matcher(kind, expected, edition)
         if requests and not line.ended:
-            found = wire.together(line, requests, same, batch=False)
+            found, unanswered = wire.together(line, requests, same, batch=False)
+            noted = len(out.findings)
+            found, line, channel = _unanswered_alone(inner, suite, line, channel, requests, unanswered, found,
+                                                     timeout, out)
             out.add(found)
-            if not found:
+            if not found and len(out.findings) == noted:
                 out.passed.append(f"{len(requests)} requests in flight together, each answered with its own id")
         if requests and info.get("batch") is True and not line.ended:
             requests, expected = _decodes(kind, probes, edition, first=max(requests) + 1)
-            found = wire.together(line, requests, _matcher(kind, expected, edition), batch=True)
+            found, unanswered = wire.together(line, requests, _matcher(kind, expected, edition), batch=True)
+            noted = len(out.findings)
+            found, line, channel = _unanswered_alone(inner, suite, line, channel, requests, unanswered, found,
+                                                     timeout, out)
             out.add(found)
             inner.batch = not found  # the probes then go one a line, so that each is judged on its own
-            if not found:
+            if not found and len(out.findings) == noted:
                 out.passed.append(f"a batch of {len(requests)} requests, each answered with its own id")
         found = wire.end_of_input(line)
         out.add(found)
@@ -121,6 +166,43 @@ def _line_by_line(inner, suite, kind, probes: list[Probe], edition: str, timeout
     finally:
         channel.stop(kill=True)
     return True
+
+
+def _unanswered_alone(inner, suite, line, channel, requests: dict[int, dict], unanswered: list[int],
+                      found: list[Mistake], timeout: float, out: Outcome):
+    """Requests sent together and not all answered: each unanswered one sent again alone, in order, to a fresh
+    program. One unanswered alone too explains the rest (a program answering in order waits on it): the
+    implementation hangs or dies on that input, its own result (a note); all answered alone, the adapter does not
+    answer requests in flight (its mistake). Returns the mistakes left, and the line and channel to go on with."""
+    missing = [m for m in found if m.code in ("pipelining", "batch-unread")]
+    if not missing:
+        return found, line, channel
+    channel.stop(kill=True)
+    for ident in unanswered:
+        channel, line, greeted = _greeted(inner, suite, timeout)
+        answered = {}
+        if greeted:
+            line.channel.send({"id": ident, **requests[ident]})
+            answered, _ = line.collect({ident}, "alone", arrays=False)
+        channel.stop(kill=True)
+        if greeted and ident not in answered:
+            status = "it died" if line.ended else f"no answer within {timeout:g} s"
+            out.findings.append(f"request {ident} of those in flight ({requests[ident]['op']} of "
+                                f"{requests[ident].get('frame', '')[:48]}…), sent again alone: {status}: the "
+                                "implementation hangs or dies on this input, and the others waited behind it")
+            found = [m for m in found if m not in missing]
+            break
+    channel, line, _ = _greeted(inner, suite, timeout)
+    return found, line, channel
+
+
+def _greeted(inner, suite, timeout: float):
+    """A fresh program of the adapter, greeted: (channel, line, whether it answered hello)."""
+    channel = inner.open_channel()
+    line = wire.Line(channel, timeout)
+    info, _ = wire.hello(line, suite.name, suite.encoding_param + "s", suite.encodings, lambda: inner.stderr,
+                         inner.hello_timeout)
+    return channel, line, info is not None
 
 
 def _decodes(kind, probes: list[Probe], edition: str, first: int) -> tuple[dict[int, dict], dict[int, tuple]]:
@@ -153,8 +235,16 @@ def _matcher(kind, expected: dict[int, tuple], edition: str):
     return same
 
 
-def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, out: Outcome) -> None:
-    """Every probe through the session, judged by the case kind; each answer that is not right explained."""
+def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, out: Outcome,
+           reads: set[tuple[str, str]] = frozenset()) -> None:
+    """Every probe through the session, judged by the case kind; each answer that is not right explained. ``reads``:
+    the (group, encoding) the first pass found the implementation reads: "unsupported" for frames of one of them,
+    inputs of several kinds, calls a capability absent that it has.
+
+    What either party could have caused is not the adapter's mistake: a probe left unanswered (the implementation hangs
+    on it) where the adapter answers others is a note; a rule named that the input does not break is shown with both
+    readings unless the adapter names that rule for inputs breaking different rules (then no check of the
+    implementation's explains it)."""
     emits = frozenset(info["emits"])
     jobs, by_job = [], {}
     for probe in probes:
@@ -176,9 +266,23 @@ def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, 
         out.add([Mistake("no-start", str(exc), "the probes")])
         return
     out.nothing = bool(answered) and all(answer.kind == "unsupported" for _, answer in answered)
+    answers = any(answer.kind in ("ok", "rejected") for _, answer in answered)
     float_decodes = []
+    misnamed: dict[str, list[tuple[Probe, str, Mistake]]] = {}  # rule named -> the probes it was named for
+    absent: list[tuple[Probe, Mistake]] = []  # "unsupported" for a frame of a group and encoding it reads
     for job, answer in answered:
         probe = by_job[id(job)]
+        where = f"{job.request.check} of {probe.case.id}"
+        if answer.kind == "unsupported" and job.request.op == "decode" and \
+                (probe.case.group, job.request.encoding) in reads:
+            absent.append((probe, Mistake("unsupported-read", f"answered \"unsupported\" ({answer.reason[:120]}) "
+                                                              f"for a {probe.case.group} frame ({job.request.encoding}), "
+                                                              "a message it decodes otherwise", where)))
+            continue
+        if answer.kind == "timeout" and answers:
+            out.findings.append(f"{where}: TIMEOUT: {answer.reason}: the adapter answers other requests, so the "
+                                "implementation hangs on this input")
+            continue
         if job.request.check == NO_HEADER:
             out.add(_no_header(kind, probe, job.request, answer, edition, out))
             continue
@@ -193,13 +297,23 @@ def _probe(session, suite, kind, probes: list[Probe], edition: str, info: dict, 
             continue
         explained = suite.implementation_errata(probe.case.id, info["errata"], probe.case.data.get("tags", ()))
         found = _explain(kind, probe, job.request, answer, result, edition)
-        where = f"{job.request.check} of {probe.case.id}"
-        if isinstance(found, list) and found and not explained:
+        if isinstance(found, list) and found and found[0].code == "wrong-rule" and not explained:
+            misnamed.setdefault(answer.rule, []).append((probe, where, found[0]))
+        elif isinstance(found, list) and found and not explained:
             out.add(found)
         else:
             errata = f" (erratum {', '.join(explained)})" if explained else ""
             out.findings.append(f"{where}: {result.verdict.value}{errata}: {result.detail}")
     out.decoded_right = bool(float_decodes) and all(float_decodes)
+    if len({probe.teaches for probe, _ in absent}) > 1:  # for inputs of several kinds: refusals called absence
+        out.add([mistake for _, mistake in absent])
+    else:  # one kind of input (e.g. an id it cannot tell from one it does not implement): the implementation may say so
+        out.findings += [f"{m.where}: {m.seen} (a refusal says more)" for _, m in absent]
+    for rule, named in misnamed.items():
+        if len({probe.teaches for probe, _, _ in named}) > 1:  # one rule for inputs breaking different rules
+            out.add([mistake for _, _, mistake in named])
+        else:
+            out.rules += [f"{where}: named {rule!r}; {mistake.seen}" for _, where, mistake in named]
     if len(out.mistakes) == wrong_before:
         floats = sum(p.teaches in FEATURES for p in probes)
         classes = sum(p.teaches.startswith("class:") for p in probes)
@@ -223,6 +337,8 @@ def _explain(kind, probe: Probe, request: Request, answer: Answer, result, editi
         if result.verdict is Verdict.ADAPTER_ERROR:
             return [Mistake("unknown-rule", f"rule {answer.rule!r}: {answer.reason}", where)]
         return None
+    if answer.kind == "adapter-error" and answer.reason.startswith(GAVE_UP):  # crashes or hangs on each replay
+        return None
     if answer.kind == "adapter-error":
         if answer.reason.startswith("adapter failed: "):
             broken = (f" (an input breaking {' and '.join(probe.breaks)})" if probe.breaks else
@@ -230,6 +346,8 @@ def _explain(kind, probe: Probe, request: Request, answer: Answer, result, editi
                       f" (an input of {probe.teaches.replace(':', ' ')}, which an implementation may accept or refuse)"
                       if probe.teaches.startswith("class:") else "")
             return [Mistake("internal", answer.reason + broken, where)]
+        if BARE_CONSTANT.search(answer.reason):
+            return [Mistake("nan-token", answer.reason, where)]
         return [Mistake("malformed", answer.reason, where)]
     if answer.kind != "ok":
         return None
@@ -289,6 +407,9 @@ def _no_header(kind, probe: Probe, request: Request, answer: Answer, edition: st
     """An encode request whose header gives no field: encoded with the implementation's defaults, or a mistake."""
     where = f"encode of {probe.case.id} with \"header\": {{}}"
     if answer.kind == "unsupported":
+        return []
+    if answer.reason.startswith(GAVE_UP):  # the session gave up on a program dying on the probes before it
+        out.findings.append(f"{where}: {answer.kind}: {answer.reason}")
         return []
     if answer.kind != "ok":
         return [Mistake("header-absent", f"{answer.kind}: {answer.reason}", where)]

@@ -93,9 +93,50 @@ CATALOGUE = {
                      "write the shortest decimal that reads back to the same float at the field's width (Java "
                      "Float.toString/Double.toString, Go strconv.FormatFloat(v, 'g', -1, 32 or 64), Rust's {} of "
                      "an f32 or f64, C printf(\"%.9g\") for a float and \"%.17g\" for a double)"),
+    "unsupported-read": ("\"unsupported\" answered for a frame of a message and byte order the adapter decodes "
+                         "otherwise",
+                         "\"unsupported\" says the implementation lacks the capability (it reads no frame of that "
+                         "message): answer a frame it refuses {\"ok\": false, \"error\": ..., \"rule\": ...} (rule only "
+                         "where its check says which), and one it reads with what it decoded"),
+    "big-int": ("a large integer was answered as a float",
+                "write integers as JSON integers, every digit (a writer going through a double rounds those beyond "
+                "2^53: in JavaScript use a BigInt-aware writer; in Java write the long itself)"),
     "value": ("a probe was decoded with another value",
               "if the implementation reads the frame right, the adapter's conversion to the decoded form is wrong"),
 }
+
+
+# The fix of a mistake in the adapter's own language, where it has a habit of its own (language: see ``language``).
+IN_LANGUAGE = {
+    "nan-token": {
+        "python": "json.dumps writes float('nan') and float('inf') as NaN and Infinity: turn each float into "
+                  "\"nan\" (or \"nan:<hex bits>\"), \"inf\" or \"-inf\" before writing, and pass allow_nan=False so "
+                  "that one you missed raises instead of writing a line that is not JSON",
+        "java": "Gson's serializeSpecialFloatingPointValues() and Jackson's default write NaN and Infinity bare: write "
+                "Float.isNaN(v) ? \"nan\" : Float.isInfinite(v) ? (v > 0 ? \"inf\" : \"-inf\") : v yourself",
+        "javascript": "JSON.stringify writes NaN and Infinity as null, and hand-built lines as NaN: write \"nan\", "
+                      "\"inf\" and \"-inf\" strings for them",
+    },
+}
+LANGUAGES = {"python": ("python", ".py"), "java": ("java", ".jar", ".class", "kotlin", "gradle", "mvn"),
+             "javascript": ("node", ".js", ".mjs", "deno", "bun")}
+
+
+def language(argv: list[str] | None) -> str | None:
+    """The language an adapter's command line names (its program or script), or None."""
+    for word in (argv or [])[:3]:
+        name = word.rsplit("/", 1)[-1].lower()
+        for lang, marks in LANGUAGES.items():
+            if any(name.startswith(m) if not m.startswith(".") else name.endswith(m) for m in marks):
+                return lang
+    return None
+
+
+def fix_in(code: str, lang: str | None) -> str:
+    """The fix of mistake ``code``, in the adapter's language where it has one of its own."""
+    general = CATALOGUE[code][1]
+    specific = IN_LANGUAGE.get(code, {}).get(lang or "")
+    return f"{specific} ({general})" if specific else general
 
 
 @dataclass(frozen=True)
@@ -116,7 +157,7 @@ class Mistake:
 def value_mistake(expected, actual) -> str | None:
     """The code of a classic writer's mistake that turns ``expected`` (a decoded form's value) into ``actual``, or
     None: −0.0 as 0, an fp32 NaN widened or quieted or written in wire order, a NaN's bits lost, an infinity or a float
-    with too few digits."""
+    with too few digits, an integer beyond 2^53 rounded through a double."""
     if isinstance(expected, float) and expected == 0 and math.copysign(1.0, expected) < 0:
         return "negative-zero" if _number(actual) and actual == 0 and math.copysign(1.0, actual) > 0 else None
     if isinstance(expected, str) and expected.startswith("nan:"):
@@ -131,6 +172,9 @@ def value_mistake(expected, actual) -> str | None:
                 return "nan-bytes"
             return None
         return "nan-word"
+    if isinstance(expected, int) and not isinstance(expected, bool) and abs(expected) >= 2 ** 53:
+        return "big-int" if _number(actual) and actual != expected and abs(actual - expected) <= abs(expected) * 1e-15 \
+            else None
     if expected in ("inf", "-inf"):
         return "inf-word" if actual != expected else None
     if isinstance(expected, float) and math.isfinite(expected) and _number(actual) and actual != expected:

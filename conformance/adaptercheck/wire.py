@@ -139,10 +139,10 @@ def unknown_op(line: Line, suite: str) -> list[Mistake]:
     return mistakes
 
 
-def together(line: Line, requests: dict[int, dict], same, *, batch: bool) -> list[Mistake]:
+def together(line: Line, requests: dict[int, dict], same, *, batch: bool) -> tuple[list[Mistake], list[int]]:
     """Send ``requests`` (id -> request) without waiting, one line each or as one batch line; every one must be
     answered, each with its own id. ``same(ident, reply)``: the id of the request whose expected answer ``reply``
-    is, when that can be told (a decoded message), else None."""
+    is, when that can be told (a decoded message), else None. Returns the mistakes and the ids left unanswered."""
     where = ("a batch of " if batch else "") + f"{len(requests)} requests in flight ({', '.join(map(str, requests))})"
     if batch:
         line.channel.send([{"id": i, **r} for i, r in requests.items()])
@@ -150,8 +150,9 @@ def together(line: Line, requests: dict[int, dict], same, *, batch: bool) -> lis
         for ident, request in requests.items():
             line.channel.send({"id": ident, **request})
     answers, mistakes = line.collect(set(requests), where, arrays=batch)
-    if len(answers) < len(requests):
-        missing = ", ".join(str(i) for i in requests if i not in answers)
+    unanswered = [i for i in requests if i not in answers]
+    if unanswered:
+        missing = ", ".join(map(str, unanswered))
         mistakes.append(Mistake("batch-unread" if batch else "pipelining",
                                 f"answered {len(answers)} of {len(requests)}; no answer to {missing}", where))
     for ident, reply in answers.items():
@@ -159,7 +160,7 @@ def together(line: Line, requests: dict[int, dict], same, *, batch: bool) -> lis
         if matches is not None and matches != ident:
             mistakes.append(Mistake("ordering", f"the answer with id {ident} is the answer to request {matches}: "
                                                 f"{snippet(json.dumps(reply))}", where))
-    return mistakes
+    return mistakes, unanswered
 
 
 def end_of_input(line: Line) -> list[Mistake]:

@@ -15,6 +15,8 @@ def add(sub) -> None:
     add_adapter(check, what="the adapter to check")
     add_suite(check)
     check.add_argument("--edition", help="the edition whose probes to send (default: the suite's first)")
+    check.add_argument("--message", metavar="MESSAGE", action="append", default=[],
+                       help="check only this message (repeatable): its first pass and probes")
     check.set_defaults(func=command)
 
 
@@ -23,13 +25,16 @@ def command(args) -> int:
     from ..escaping import printable
     from ..files import open_corpus
     from ..adaptercheck.check import check
-    from ..adaptercheck.mistakes import Mistake
+    from ..adaptercheck.mistakes import Mistake, fix_in, language
     from ..paths import CONTRACT
     from .adapters import adapter_choice, open_session
-    from ..arguments import chosen_edition
+    from ..arguments import chosen_edition, known_groups
 
     suite, cases = open_corpus(args.suite)
     edition = chosen_edition(suite, args.edition)
+    if args.message:
+        known_groups(suite, args.message, [g.name for g in suite.groups])
+        cases = [c for c in cases if c.group in args.message]
     name, argv = adapter_choice(args, suite)
     session = open_session(name, argv, args, suite)
     try:
@@ -48,6 +53,8 @@ def command(args) -> int:
         print(f"  note  {printable(finding)[:400]} (the implementation's own result: a run judges it)")
     if outcome.either:
         either(outcome)
+    if outcome.rules:
+        rule_readings(outcome)
     if outcome.nothing:
         print("  note  every probe was answered \"unsupported\": the adapter speaks the contract but implements "
               "nothing yet (put the implementation's calls where the starter says TODO); a run of it tests nothing "
@@ -59,7 +66,7 @@ def command(args) -> int:
             print(f"  seen: {printable(mistake.seen)[:400]}" + (f" [{printable(mistake.where)}]" if mistake.where else ""))
         if len(same) > SHOWN:
             print(f"  … and {len(same) - SHOWN} more like these")
-        print(f"  fix:  {same[0].fix}")
+        print(f"  fix:  {fix_in(same[0].code, language(argv))}")
     if kinds:
         print(f"{len(kinds)} kind{'s' if len(kinds) != 1 else ''} of mistake: the adapter does not speak the contract "
               f"yet (the contract: {CONTRACT})")
@@ -85,3 +92,19 @@ def either(outcome) -> None:
     print(f"        to tell: {decoded}log the value the adapter hands the implementation (on stderr), or check its "
           "value parser alone (the starters' --values reads value probes and answers them without the "
           "implementation): if the value is right when handed over, the frame is the implementation's")
+
+def rule_readings(outcome) -> None:
+    """Refusals naming a rule the input does not break, each for one kind of input: both readings, and how to tell."""
+    from ..escaping import printable
+
+    for line in outcome.rules[:SHOWN]:
+        print(f"  note  {printable(line)[:400]}")
+    if len(outcome.rules) > SHOWN:
+        print(f"        … and {len(outcome.rules) - SHOWN} more like these")
+    print("        either the implementation's own check refused it under that rule (e.g. its transport takes the CRC "
+          "from the datagram's last two bytes, not from the frame's footer): its own result, which a run judges "
+          "NON_STRICT (the adapter reports it faithfully: keep naming the rule)")
+    print("        or the adapter names a rule the implementation did not give: its mistake")
+    print("        to tell: read the implementation's own error for this input (the answer's \"error\" above): if it is "
+          "that rule's check that failed, the result is the implementation's; the adapter names that rule for no "
+          "other kind of input, which an adapter naming one rule for every refusal would")

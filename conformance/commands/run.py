@@ -22,6 +22,10 @@ def add(sub) -> None:
     run.add_argument("--errata", metavar="KEY", help="the implementation errata that explain failures "
                                                      "(default: the key the adapter's hello declares)")
     run.add_argument("--strict", action="store_true", help="NON_STRICT verdicts fail too")
+    run.add_argument("--require", metavar="MESSAGE", action="append", default=[],
+                     help="a coverage gate: the run fails (exit 1) when this message (repeatable; 'all': every message "
+                          "of the run) was not tested. Without it, a message the implementation does not do is "
+                          "reported as not tested and does not fail the run")
     run.add_argument("--waivers", metavar="FILE", help="JSON waivers: case ids, globs, rules or cause keys, each with a "
                                                        "reason and optional expiry")
     run.add_argument("--write-waivers", metavar="FILE", help="write today's failures as a starting waivers file")
@@ -68,6 +72,7 @@ def selection(args, rerun: frozenset[str] | None = None):
         raise UsageError(f"unknown edition {args.edition!r} of the suite {suite.name!r} "
                          f"(editions: {', '.join(suite.editions)})")
     known_groups(suite, args.message, [g.name for g in suite.groups])
+    known_groups(suite, [name for name in getattr(args, "require", ()) if name != "all"], [g.name for g in suite.groups])
     chosen = select_cases(everything, args.edition, args.message, args.id, args.tag, ids=rerun)
     return suite, everything, select_cases(chosen, args.edition, shard=args.shard), chosen
 
@@ -148,7 +153,8 @@ def command(args) -> int:
                                waivers=waivers, strict=args.strict,
                                notes=rerun_notes(len(cases)) + notes + held_notes + live.notes(args, options),
                                progress=progress, options=options, provenance=made, exitfirst=args.exitfirst,
-                               shard=args.shard, selection=chosen_cases if args.shard else None)
+                               shard=args.shard, selection=chosen_cases if args.shard else None,
+                               corpus=everything)
     except AdapterStartError as exc:
         raise UsageError(str(exc)) from exc
     finally:
@@ -156,6 +162,7 @@ def command(args) -> int:
         if recorder is not None:
             # a run stopped at its first failure (--exitfirst) recorded only part of the exchange, as an interrupted one
             recorder.close(complete=result is not None and result.complete)
+    result.required = list(dict.fromkeys(args.require))
     if args.shard:
         result.notes.insert(0, f"shard {args.shard[0]} of {args.shard[1]}: {len(cases)} of the selection's {total} "
                                "cases")

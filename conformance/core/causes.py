@@ -140,8 +140,9 @@ def cause_of(case, data: dict | None = None) -> tuple[str, str] | None:
 
 
 def group_causes(cases: Iterable, cause: Callable[[object], tuple[str, str] | None] = cause_of,
-                 errata: bool = True) -> list[Cause]:
-    """The cases' causes (``cause(case)``: (key, title) or None), grouped, largest first (then by key)."""
+                 errata: bool = True, describe: Callable[[str, str, list], str] | None = None) -> list[Cause]:
+    """The cases' causes (``cause(case)``: (key, title) or None), grouped, largest first (then by key);
+    ``describe(key, title, members)``: the group's title, naming what its cases share (``described``)."""
     groups: dict[str, tuple[str, list]] = {}
     for case in cases:
         found = cause(case)
@@ -149,6 +150,8 @@ def group_causes(cases: Iterable, cause: Callable[[object], tuple[str, str] | No
             groups.setdefault(found[0], (found[1], []))[1].append(case)
     out = []
     for key, (title, members) in groups.items():
+        if describe is not None:
+            title = describe(key, title, members)
         explained = Counter(e for c in members for e in c.errata) if errata else Counter()
         out.append(Cause(key, title, tuple(c.id for c in members), tuple(dict.fromkeys(c.message for c in members)),
                          tuple(explained.most_common()), tuple(sorted(Counter(c.verdict.value for c in members).items()))))
@@ -166,3 +169,55 @@ def cause_from(doc: dict) -> Cause:
     """A group as a saved result holds it (its cases are regrouped against the result's own cases on reading)."""
     return Cause(doc["key"], doc["title"], tuple(doc["cases"]), tuple(doc["messages"]),
                  tuple(doc.get("errata", {}).items()), tuple(doc.get("verdicts", {}).items()))
+
+
+DESCRIBED = ("fails/", "not-permitted/")  # the causes whose title says what their cases share, where it can be told
+SHOWN_PATHS = 3  # fields named in a title before "… (N fields)"
+REFUSAL_WORDS = 80  # characters of the words refusals share, quoted in a title
+
+
+def described(key: str, title: str, members: list, data: dict, differences: Callable[[object], list]) -> str:
+    """A title naming the difference a group's cases share: their value classes (the case data's ``class:`` tags),
+    the one value the implementation gave in their place, the fields that differ; for refusals, the types every case
+    holds and the words every refusal begins with. ``differences(case)``: (path, expected, answered) of its failing
+    checks, as the case kind reads them; ``data``: the cases' data, by id."""
+    if not key.startswith(DESCRIBED):
+        return title
+    parts = []
+    classes = [sorted(t[6:] for t in data.get(c.id, {}).get("tags", ()) if t.startswith("class:")) for c in members]
+    if all(classes):
+        named = list(dict.fromkeys(x for found in classes for x in found))
+        parts.append("class " + " or ".join(named[:SHOWN_IN_TITLE]) + (" …" if len(named) > SHOWN_IN_TITLE else ""))
+    found = [d for c in members for d in differences(c)]
+    if found:
+        answered = {repr(a) for _, _, a in found}
+        if len(answered) == 1:
+            did = set(ops(members[0])) if all(set(ops(c)) == set(ops(members[0])) for c in members) else set()
+            verb = "written" if did and did <= {"encode", "roundtrip"} else "read" if did == {"decode"} else "answered"
+            parts.append(f"{verb} as {answered.pop()}")
+        paths = list(dict.fromkeys(p for p, _, _ in found))
+        shown = ", ".join(paths[:SHOWN_PATHS])
+        parts.append(f"in {shown}" + (f" … ({len(paths)} fields)" if len(paths) > SHOWN_PATHS else ""))
+    else:
+        held = [set(data.get(c.id, {}).get("definitions", ())) for c in members]
+        common = sorted(set.intersection(*held)) if held and all(held) else []
+        own = {c.message for c in members}
+        if common and set(common) != own:
+            parts.append("holding " + ", ".join(common[:SHOWN_IN_TITLE]))
+        refusals: dict[str, list[str]] = {}  # by operation: the words of each refusal
+        for c in members:
+            for k in c.checks:
+                if k.verdict is Verdict.FAIL and k.detail.startswith("refused"):
+                    refusals.setdefault(k.check.split("-", 1)[0], []).append(k.detail.split(": ", 1)[-1])
+        prefix = max((_common_prefix(texts) for texts in refusals.values()), key=len, default="")
+        if len(prefix) >= 12:
+            parts.append(f"refused: {prefix[:REFUSAL_WORDS]}{'…' if len(prefix) > REFUSAL_WORDS else ''}")
+    return f"{title}: {'; '.join(parts)}" if parts else title
+
+
+def _common_prefix(texts: list[str]) -> str:
+    if not texts:
+        return ""
+    first, last = min(texts), max(texts)
+    n = next((i for i, (a, b) in enumerate(zip(first, last)) if a != b), min(len(first), len(last)))
+    return first[:n].rstrip()

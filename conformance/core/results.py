@@ -16,11 +16,12 @@ from .causes import Cause, cause_from, group_causes, regrouped
 from .verdicts import ATTENTION, UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
-VERSION = 5
+VERSION = 6
 FORMAT = f"{FORMAT_NAME}/{VERSION}"
 SCHEMAS = {1: "result-1.schema.json", 2: "result-2.schema.json", 3: "result-3.schema.json", 4: "result-4.schema.json",
-           5: "result.schema.json"}
+           5: "result-5.schema.json", 6: "result.schema.json"}
 INTERRUPTED = 130  # the exit code of a run stopped by Ctrl-C, as shells report SIGINT
+NOT_TESTED = ("UNSUPPORTED", "INCONCLUSIVE")  # the verdicts of a group of which nothing was tested
 
 
 @dataclass(frozen=True)
@@ -152,6 +153,58 @@ class RunResult:
     stale_waivers: list[str] = field(default_factory=list)  # broad waivers (e.g. "cause accepts/rule:crc") that waived
     # nothing of the cases they name: the run fails as for a WAIVER_STALE case
     stopped: bool = False  # not complete because it stopped at its first failing case (--exitfirst), not interrupted
+    required: list[str] = field(default_factory=list)  # groups that must be tested (--require; "all": every group
+    # of the run): the run fails when one of them is not
+
+    def overall(self) -> str:
+        """PASS, FAIL, ERROR (an adapter error), INCONCLUSIVE (nothing could be tested) or INCOMPLETE (interrupted),
+        from the exit code."""
+        code = self.exit_code()
+        if code == 2 and not self.incidents and all(c.verdict in UNTESTED for c in self.cases):
+            return "INCONCLUSIVE"
+        return {0: "PASS", 1: "FAIL", INTERRUPTED: "INCOMPLETE"}.get(code, "ERROR")
+
+    def untested_groups(self) -> list[str]:
+        """The groups of the run whose verdict says nothing was tested (UNSUPPORTED, INCONCLUSIVE)."""
+        return [m.name for m in self.messages if m.verdict in NOT_TESTED]
+
+    def unmet_requirements(self) -> list[str]:
+        """The required groups (``required``) that were not tested: untested, or (but in a shard, whose other
+        shards may hold them) absent from the run."""
+        if not self.required:
+            return []
+        verdicts = {m.name: m.verdict for m in self.messages}
+        wanted = list(verdicts) if "all" in self.required else self.required
+        return [name for name in wanted if verdicts.get(name, "UNSUPPORTED" if self.shard is None else "PASS")
+                in NOT_TESTED]
+
+    def headline(self) -> str:
+        """The overall verdict and what it covers: "PASS for 2 of 31 messages; 29 not tested" (never a bare PASS
+        when messages went untested); every report opens with it."""
+        verdict, total = self.overall(), len(self.messages)
+        counts = Counter(m.verdict for m in self.messages)
+        untested = counts["UNSUPPORTED"] + counts["INCONCLUSIVE"]
+        if untested == total:
+            return f"{verdict}, none of {_messages(total)} tested"
+        if verdict == "PASS":
+            passed = counts["PASS"] + counts["WAIVED"]
+            head = ("PASS" + (" with waivers" if counts["WAIVED"] else "") +
+                    (f" for all {_messages(total)}" if passed == total > 1 else f" for {passed} of {_messages(total)}"))
+            parts = [f"{counts['WAIVED']} with failures waived"] if counts["WAIVED"] else []
+        elif counts["FAIL"]:
+            head = f"{verdict} for {counts['FAIL']} of {_messages(total)}"
+            parts = [f"{counts['PASS']} pass{'es' if counts['PASS'] == 1 else ''}"] if counts["PASS"] else []
+        else:
+            head = f"{verdict}, {counts['PASS']} of {_messages(total)} pass{'es' if counts['PASS'] == 1 else ''}"
+            parts = []
+        if counts["WAIVED"] and verdict != "PASS":
+            parts.append(f"{counts['WAIVED']} waived")
+        if untested:
+            parts.append(f"{untested} not tested")
+        unmet = self.unmet_requirements()
+        if unmet:
+            parts.append(f"required but not tested: {', '.join(unmet[:10])}{' ...' if len(unmet) > 10 else ''}")
+        return "; ".join([head, *parts])
 
     def cause_groups(self) -> list[Cause]:
         """The failing and NON_STRICT cases grouped by cause, largest first (as the run grouped them, or from what
@@ -177,8 +230,9 @@ class RunResult:
     def exit_code(self) -> int:
         """130 if interrupted (not stopped at its first failure); else 2 for an adapter error or protocol violation, or when nothing was tested
         (every case INCONCLUSIVE or UNSUPPORTED; a shard of no case tested all it was given); else 1 for a failing
-        verdict, a crash or gone incident, (under --strict) a check kind left untested or a stale waiver (of a whole
-        run: in a shard, another shard may use it); else 0."""
+        verdict, a crash or gone incident, (under --strict) a check kind left untested, a required group
+        (``required``) not tested, or a stale waiver (of a whole run: in a shard, another shard may use it); else 0:
+        a partial implementation passes for what it does, its other groups reported as not tested."""
         if not self.complete and not self.stopped:
             return INTERRUPTED
         verdicts = {c.verdict for c in self.cases}
@@ -187,7 +241,7 @@ class RunResult:
         if self.nothing_tested() is not None:
             return 2
         if any(failing(v, self.strict) for v in verdicts) or self.incidents or (self.strict and self.untested) or \
-                (self.stale_waivers and self.shard is None):  # a shard's: another shard may use it (the merge decides)
+                (self.stale_waivers and self.shard is None) or self.unmet_requirements():
             return 1
         return 0
 
@@ -201,7 +255,8 @@ class RunResult:
             return "nothing could be tested: no case was judged"
         why = ", ".join(f"{n} {v.value}" for v, n in sorted(counts.items(), key=lambda vn: vn[0].value))
         if set(counts) == {Verdict.UNSUPPORTED}:
-            why += " (every answer was \"unsupported\": nothing asked of the implementation is implemented yet)"
+            why += (" (every answer was \"unsupported\", or a refusal from an implementation shown to do none of what it "
+                    "refused: nothing asked of the implementation is implemented yet)")
         return f"nothing could be tested: {why}"
 
     def to_dict(self) -> dict:
@@ -210,13 +265,14 @@ class RunResult:
             "format": FORMAT, "suite": self.suite, "title": self.title, "edition": self.edition,
             "implementation": self.implementation, "adapter": self.adapter, "strict": self.strict,
             "started": self.started, "duration": self.duration, "complete": self.complete, "summary": self.summary,
-            "exit_code": self.exit_code(), "causes": [c.to_dict() for c in self.cause_groups()], "notes": self.notes, "untested": self.untested,
+            "exit_code": self.exit_code(), "headline": self.headline(), "causes": [c.to_dict() for c in self.cause_groups()], "notes": self.notes, "untested": self.untested,
             "incidents": [asdict(i) for i in self.incidents], "stderr": self.stderr,
             "messages": [{"name": m.name, "key": m.key, "verdict": m.verdict,
                           "counts": {v.value: n for v, n in sorted(m.counts.items())},
                           "cases": [case_dict(c, memo) for c in m.cases]} for m in self.messages],
         } | ({"shard": {"index": self.shard[0], "of": self.shard[1]}} if self.shard else {}) | (
             {"stale_waivers": self.stale_waivers} if self.stale_waivers else {}) | (
+            {"required": self.required} if self.required else {}) | (
             {"provenance": asdict(self.provenance)} if self.provenance else {})
 
     @classmethod
@@ -232,7 +288,8 @@ class RunResult:
                    Provenance(**doc["provenance"]) if "provenance" in doc else None, causes,
                    doc.get("stale_waivers", []),
                    # not complete, yet not exiting as interrupted: stopped at its first failing case
-                   not doc.get("complete", True) and doc.get("exit_code", INTERRUPTED) != INTERRUPTED)
+                   not doc.get("complete", True) and doc.get("exit_code", INTERRUPTED) != INTERRUPTED,
+                   doc.get("required", []))
 
 
 def format_version(doc) -> int:
@@ -254,14 +311,21 @@ def format_version(doc) -> int:
 
 
 def message_verdict(cases: list[CaseResult], strict: bool) -> str:
-    """FAIL if a case fails; if no case tested anything, INCONCLUSIVE when one could not be tested and UNSUPPORTED
-    when the implementation does none of them; else PASS."""
+    """FAIL if a case fails; if nothing was tested (no case, or none of the group's valid cases where it has some:
+    a refusal by an implementation that reads none of them shows nothing), INCONCLUSIVE when one could not be tested
+    and UNSUPPORTED otherwise; WAIVED when a waiver covers a failure; else PASS."""
     if any(failing(c.verdict, strict) for c in cases):
         return "FAIL"
     verdicts = {c.verdict for c in cases}
     if verdicts and verdicts <= set(UNTESTED):
         return "INCONCLUSIVE" if Verdict.INCONCLUSIVE in verdicts else "UNSUPPORTED"
+    valid = [c for c in cases if c.expect == "valid"]
+    if valid and all(c.verdict in UNTESTED for c in valid):
+        return "INCONCLUSIVE" if any(c.verdict is Verdict.INCONCLUSIVE for c in valid) else "UNSUPPORTED"
+    if Verdict.WAIVED in verdicts:
+        return "WAIVED"
     return "PASS"
+
 
 
 def case_dict(c: CaseResult, memo: dict | None = None) -> dict:
@@ -308,3 +372,7 @@ def case_from(d: dict, message: str) -> CaseResult:
               for k in d["checks"]]
     return CaseResult(d["id"], message, Verdict(d["verdict"]), d["expect"], d["clause"], checks, d.get("rule"),
                       d.get("errata", []), d.get("waiver"), d.get("timeline", []))
+
+
+def _messages(n: int) -> str:
+    return f"{n} message{'' if n == 1 else 's'}"

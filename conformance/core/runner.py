@@ -11,7 +11,8 @@ from dataclasses import replace
 from typing import Callable
 
 from .cases import Case, expectation, passive_id
-from .causes import about, cause_of, group_causes
+from .evidence import Evidence
+from .causes import about, cause_of, described, group_causes
 from .hello import check_hello
 from .results import CaseResult, CheckResult, Judgement, MessageResult, Provenance, RunResult, message_verdict
 from .session import Answer, Job, Session
@@ -28,7 +29,8 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
               notes: list[str] | None = None, progress: Callable[[int], None] | None = None,
               options: dict | None = None, clock: Callable[[], float] = time.perf_counter,
               started: str | None = None, provenance: Provenance | None = None, exitfirst: bool = False,
-              shard: tuple[int, int] | None = None, selection: list[Case] | None = None) -> RunResult:
+              shard: tuple[int, int] | None = None, selection: list[Case] | None = None,
+              corpus: list[Case] | None = None, evidence: bool = True) -> RunResult:
     """Judge every case; ``progress(n)`` is called as answers arrive (n = jobs done so far, every
     ``PROGRESS_EVERY`` answers and at the end).
 
@@ -50,6 +52,11 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     naming cases of the selection that waives none of the shard's is noted, and left to the merge of the shards
     (another shard may use it; the merge finds it stale when no shard does).
 
+    ``evidence``: a refusal counts only from an implementation shown to do what it refuses (see ``Evidence``);
+    ``corpus`` (the cases loaded, of which ``cases`` are a selection): where the selection shows nothing of a group,
+    the base a refused case names (else a valid case of its group) is asked too. False: each refusal is judged alone
+    (a fuzzer's generated frames, whose deviations are what it reports).
+
     The cyclic garbage collector is paused while the run lasts: a run makes little cyclic garbage, and each full
     collection would walk the whole loaded corpus again.
     """
@@ -57,14 +64,14 @@ def run_cases(session: Session, suite: Suite, cases: list[Case], *, edition: str
     gc.disable()
     try:
         return _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-                    started, provenance, exitfirst, shard, selection)
+                    started, provenance, exitfirst, shard, selection, corpus, evidence)
     finally:
         if collecting:
             gc.enable()
 
 
 def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes, progress, options, clock,
-         started, provenance, exitfirst, shard, selection) -> RunResult:
+         started, provenance, exitfirst, shard, selection, corpus, evidence) -> RunResult:
     started = started or dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     began = clock()
     hello = check_hello(session.hello(), suite.name, suite.encoding_param + "s", suite.encodings)
@@ -84,6 +91,7 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     jobs = [Job(name, c.id, r) for c in cases for r in plans[c.id]]
     # per case: its data, how it is judged, and what its checks found (judged in place as answers come)
     judges = {c.id: (c.data, kinds[c.kind].judge, []) for c in cases}
+    weigh = Evidence(suite, cases, edition) if evidence else None
     timelines: dict[str, list[dict]] = {}
     answered: list[str] = []  # the case of each job answered (counted if the run is interrupted)
     waivers = waivers or Waivers()
@@ -98,6 +106,8 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
             timelines[job.case_id] = judged.timeline
         else:
             found.append(judged)
+            if weigh is not None:
+                weigh.answered(job, answer, judged)
         answered.append(job.case_id)
         if left is not None:
             left[job.case_id] -= 1
@@ -110,9 +120,13 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
             if job.request.op == "skip" and not stopped_at:
                 judge(job, Answer("skipped", reason=job.request.params.get("reason", "")))
         live = [job for job in jobs if job.request.op != "skip"]
+        asked = weigh.plan(corpus or (), plans, emits) if weigh is not None and live else []
         done = 0
-        answers = session.run(live if not stopped_at else [])
+        answers = session.run(asked + live if not stopped_at else [])
         for done, (job, answer) in enumerate(answers, 1):
+            if asked and id(job) in weigh.probes:
+                weigh.answered(job, answer)
+                continue
             judge(job, answer)
             if progress and not done % PROGRESS_EVERY:
                 progress(done)
@@ -129,6 +143,8 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
         cases = [c for c in cases if plans[c.id] and counts[c.id] == len(plans[c.id])]
         notes.insert(0, (f"stopped at the first failing case, {stopped_at[0]}" if complete else "interrupted")
                      + f": {len(cases)} of {len(plans)} cases were done; the others are not in this result")
+    if weigh is not None:
+        weigh.review({case_id: found for case_id, (_, _, found) in judges.items()})
     untested, why = hello_gaps(suite, cases, edition, emits, plans)
     if waivers and cases and all(worst({r.verdict for r in judges[c.id][2]}) in (*UNTESTED, *NEVER) for c in cases):
         waivers = Waivers()  # nothing judged: no failure to waive (the run says why nothing could be tested)
@@ -156,7 +172,14 @@ def _run(session, suite, cases, edition, adapter, errata, waivers, strict, notes
     messages = [MessageResult(g.name, g.key, message_verdict(filed[g.name], strict), filed[g.name])
                 for g in suite.groups if g.name in filed]
     data = {case.id: case.data for case in cases}
-    causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)))
+    read = {case.id: getattr(kinds[case.kind], "differences_in", None) for case in cases}
+
+    def differences(c: CaseResult) -> list:
+        found = read.get(c.id)
+        return [d for k in c.checks if k.verdict is Verdict.FAIL for d in found(data[c.id], edition, k)] if found else []
+
+    causes = group_causes((c for m in messages for c in m.cases), lambda c: cause_of(c, data.get(c.id)),
+                          describe=lambda key, title, members: described(key, title, members, data, differences))
     stale = []
     if complete and not stopped_at:
         unused = waivers.stale() if shard is None or selection is None else \

@@ -9,7 +9,7 @@ from .causes import regrouped
 from .results import MessageResult, RunResult, message_verdict
 from .waivers import stale_note
 
-SAME = ("suite", "title", "edition", "implementation", "adapter", "strict")  # what the shards of one run share
+SAME = ("suite", "title", "edition", "implementation", "adapter", "strict", "required")  # what the shards of one run share
 
 
 def merge(results: list[RunResult], group_order: list[str], case_order: dict[str, int]) -> RunResult:
@@ -65,7 +65,7 @@ def merge(results: list[RunResult], group_order: list[str], case_order: dict[str
                      sorted(set(results[0].untested).intersection(*(r.untested for r in results))),
                      provenance=first.provenance,
                      causes=regrouped([c for m in messages for c in m.cases], [g for r in results for g in r.cause_groups()]),
-                     stale_waivers=stale)
+                     stale_waivers=stale, required=first.required)
 
 
 def _shown(value, limit: int = 200) -> str:

@@ -144,7 +144,7 @@ class Search:
         untested = self.tally.untested.setdefault(self._key, Counter())
         self.tally.sent[self._key] += len(cases)
         for name, session in self.sessions.items():
-            for r in run_cases(session, self.suite, batch, edition=self.edition, adapter=name).cases:
+            for r in run_cases(session, self.suite, batch, edition=self.edition, adapter=name, evidence=False).cases:
                 out.setdefault(r.id, {})[name] = r
                 untested[name] += r.verdict in UNTESTED
         for case in cases:

@@ -7,19 +7,16 @@ import json
 import shlex
 
 from ..core.causes import Cause
-from ..core.results import INTERRUPTED, CaseResult, RunResult
-from ..core.verdicts import ATTENTION, UNTESTED, Verdict
+from ..core.results import CaseResult, RunResult
+from ..core.verdicts import ATTENTION, Verdict
 
 VERDICTS = tuple(Verdict)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
 
 def overall(result: RunResult) -> str:
     """PASS, FAIL, ERROR (an adapter error), INCONCLUSIVE (nothing could be tested) or INCOMPLETE (interrupted),
-    from the run's exit code."""
-    code = result.exit_code()
-    if code == 2 and not result.incidents and all(c.verdict in UNTESTED for c in result.cases):
-        return "INCONCLUSIVE"
-    return {0: "PASS", 1: "FAIL", INTERRUPTED: "INCOMPLETE"}.get(code, "ERROR")
+    from the run's exit code (``RunResult.overall``)."""
+    return result.overall()
 
 
 def timeline_lines(case: CaseResult, limit: int = TIMELINE_LIMIT) -> list[str]:

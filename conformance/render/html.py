@@ -32,7 +32,7 @@ TONE = {
     Verdict.NON_STRICT: "warn", Verdict.WAIVER_STALE: "warn", Verdict.IMPL_DEFINED: "info",
     Verdict.UNSUPPORTED: "mute", Verdict.WAIVED: "mute", Verdict.INCONCLUSIVE: "info",
 }
-GROUP_TONE = {"PASS": "ok", "FAIL": "bad", "INCONCLUSIVE": "info", "UNSUPPORTED": "mute"}
+GROUP_TONE = {"PASS": "ok", "FAIL": "bad", "INCONCLUSIVE": "info", "UNSUPPORTED": "mute", "WAIVED": "mute"}
 
 
 @cache
@@ -60,7 +60,7 @@ def render_html(result: RunResult) -> str:
     stderr = clean(result.stderr)
     others = [{"case": c, **timeline_view(c)} for c in result.cases if c.timeline and c.id not in anchors]
     return environment().get_template("report.html.j2").render(
-        result=result, overall=overall(result), columns=verdict_columns(result), tone=TONE, failures=shown, causes=causes,
+        result=result, overall=overall(result), headline=result.headline(), columns=verdict_columns(result), tone=TONE, failures=shown, causes=causes,
         incidents=incident_lines(result), provenance=provenance_lines(result), format=FORMAT,
         failing_total=len(failing), first_failure=first, group_tone=GROUP_TONE, stderr=stderr[:MAX_STDERR],
         stderr_cut=max(0, len(stderr) - MAX_STDERR), timelines=others,

@@ -66,7 +66,7 @@ def testcase(case: CaseResult, suite: str, message: str, strict: bool,
 
 
 def render_junit(result: RunResult) -> str:
-    props = [("suite", result.suite), ("edition", result.edition), ("implementation", result.implementation),
+    props = [("headline", result.headline()), ("suite", result.suite), ("edition", result.edition), ("implementation", result.implementation),
              ("adapter", result.adapter), ("strict", str(result.strict).lower()),
              ("complete", str(result.complete).lower()),
              *(("cause", cause_line(c)) for c in result.cause_groups()),

@@ -16,7 +16,8 @@ EMOJI = {
     Verdict.UNSUPPORTED: "⏭️", Verdict.CRASH: "💥", Verdict.TIMEOUT: "⏱️", Verdict.ADAPTER_ERROR: "🛠️",
     Verdict.WAIVED: "🙈", Verdict.WAIVER_STALE: "🧹", Verdict.INCONCLUSIVE: "❔",
 }
-OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸️", "INCONCLUSIVE": "❔", "UNSUPPORTED": "⏭️"}
+OVERALL = {"PASS": "✅", "FAIL": "❌", "ERROR": "🛠️", "INCOMPLETE": "⏸️", "INCONCLUSIVE": "❔", "UNSUPPORTED": "⏭️",
+           "WAIVED": "🙈"}
 MAX_CASES = 50
 MAX_DETAIL = 300
 MAX_TIMELINES = 10  # scenarios whose timeline is shown
@@ -41,7 +42,7 @@ def render_markdown(result: RunResult) -> str:
     columns = verdict_columns(result)
     total = len(result.cases)
     lines = [
-        f"## {OVERALL[verdict]} {cell(result.title)} conformance: {verdict} — {cell(result.implementation)} · "
+        f"## {OVERALL[verdict]} {cell(result.title)} conformance: {cell(result.headline())} — {cell(result.implementation)} · "
         f"{cell(result.edition)}",
         "",
         f"**{counted(total, 'case')}** in {counted(len(result.messages), 'message')}: "

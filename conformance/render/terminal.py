@@ -60,7 +60,7 @@ def print_result(result: RunResult, console: Console) -> None:
         counts = m.counts
         other = sum(n for v, n in counts.items() if v not in COLUMNS)
         errata = sorted({e for c in m.cases for e in c.errata})
-        colour = {"PASS": "green", "FAIL": "red"}.get(m.verdict, "yellow")
+        colour = {"PASS": "green", "FAIL": "red", "UNSUPPORTED": "dim"}.get(m.verdict, "yellow")
         table.add_row(safe(m.name), safe(m.key), f"[{colour}]{m.verdict}[/]", *(str(counts[v]) for v in COLUMNS),
                       str(other), safe(", ".join(errata)))
     console.print(table)
@@ -96,5 +96,8 @@ def print_result(result: RunResult, console: Console) -> None:
     summary = ", ".join(f"{n} {v}" for v, n in result.summary.items())
     explained = sum(1 for c in shown if c.errata)
     errata = "1 failure is a documented erratum" if explained == 1 else f"{explained} failures are documented errata"
+    if result.messages:  # the headline, then the count of cases (the last line)
+        colour = {"PASS": "green", "FAIL": "red"}.get(result.overall(), "yellow")
+        console.print(f"[bold {colour}]{safe(result.headline())}[/]")
     console.print(f"{counted(len(result.cases), 'case')} in {result.duration:.2f} s" + (f": {summary}" if summary else "")
                   + (f" ({errata})" if explained else ""))

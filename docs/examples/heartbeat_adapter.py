@@ -34,8 +34,11 @@ def decode(frame: bytes) -> dict:
     return {"abbrev": "Heartbeat", "header": header, "fields": {}}
 
 
+DEFAULT_HEADER = {"timestamp": 0.0, "src": 0xFFFF, "src_ent": 0xFF, "dst": 0xFFFF, "dst_ent": 0xFF}
+
+
 def encode(message: dict, byte_order: str) -> bytes:
-    h = message["header"]
+    h = DEFAULT_HEADER | message["header"]  # a header field the request leaves out: the codec's default
     order = "<" if byte_order == "le" else ">"
     head = struct.pack(order + HEADER, 0xFE54, HEARTBEAT, 0, h["timestamp"], h["src"], h["src_ent"], h["dst"],
                        h["dst_ent"])

@@ -26,6 +26,7 @@ from typing import Protocol
 import orjson
 
 from ...core.cases import expectation
+from ...core.evidence import ANY
 from ...core.results import ByteDiff, CheckResult
 from ...core.session import Answer, Request
 from ...core.verdicts import Verdict
@@ -80,6 +81,7 @@ class VectorCodec(Protocol):
         answer to ``op`` (decode, encode, roundtrip)."""
 
 
+CAPABILITIES: dict[tuple, str] = {}  # (op, encoding) -> what an answer shows or needs, made once
 VALID_PASS = {"decode": "decoded as expected", "encode": "frame matches", "roundtrip": "re-encoded to the same frame"}
 
 
@@ -295,6 +297,57 @@ class VectorKind:
         return "+".join(sorted({n for n, _ in used})), detail
 
     # ------------------------------------------------------------ evidence
+
+    def evidence(self, case: dict, edition: str, request: Request, answer: Answer) -> tuple[str, str] | None:
+        """What an answer shows of the implementation (core.evidence): a valid case answered shows that it reads
+        (``decode-<encoding>``, a roundtrip too) or encodes (``encode-<encoding>``) the case's group in that encoding;
+        a refusal of an invalid or acceptable case counts only from an implementation that does; a refusal of a valid
+        one only from an implementation that does anything of the group (``ANY``: else it does not implement it)."""
+        kind = answer.kind
+        if (kind != "ok" and kind != "rejected") or request.op == "describe":
+            return None
+        compiled = request.context if request.context is not None else self.compiled(case, edition)
+        capability = self.capability(case, request)
+        if kind == "ok":
+            return ("shows", capability) if compiled.expect == "valid" else None
+        return "needs", ANY if compiled.expect == "valid" else capability
+
+    def differences_in(self, case: dict, edition: str, check: CheckResult) -> list[tuple[str, object, object]]:
+        """What a failed check of a valid case got wrong, value by value: (path, expected, answered), as the reference
+        codec reads the frame the implementation wrote (or the message it read, re-encoded); [] where that cannot be
+        read (a refusal, a frame the reference refuses)."""
+        if check.actual is None or "message" not in case or check.check == "describe":
+            return []
+        encoding = check.check.split("-", 1)[1] if "-" in check.check else None
+        if encoding not in self.codec.encodings:
+            return []
+        try:
+            read = self.codec.decode(bytes.fromhex(check.actual), encoding, case, edition)
+            diffs = self.codec.differences(case["message"], read, True, edition)
+        except (ValueError, KeyError, TypeError, AttributeError):
+            return []
+        return [(d.path, d.expected, d.actual) for d in diffs if d.path is not None][:20]
+
+    @staticmethod
+    def capability(case: dict, request: Request) -> str | None:
+        """What an answer to ``request`` shows (answered, for a valid case) or needs (a refusal): ``decode-<encoding>``
+        (a roundtrip too) or ``encode-<encoding>``; None for a description."""
+        key = (request.op, request.encoding)
+        found = CAPABILITIES.get(key)
+        if found is None and request.op != "describe":
+            found = CAPABILITIES[key] = f"{'encode' if request.op == 'encode' else 'decode'}-{request.encoding}"
+        return found
+
+    @staticmethod
+    def unproven(check: CheckResult, group: str, capability: str) -> CheckResult:
+        """A refusal from an implementation shown to read (or encode) no valid case of the group: not tested."""
+        op, _, encoding = capability.partition("-")
+        did = (f"reads no valid {group} frame ({encoding})" if op == "decode" else
+               f"encodes no valid {group} message ({encoding})" if op == "encode" else
+               f"neither reads nor encodes any valid {group} case: it does not implement {group}")
+        return CheckResult(check.check, Verdict.UNSUPPORTED,
+                           f"not tested: the implementation {did}, so its refusal shows nothing "
+                           f"(it answered: {check.detail})", note=check.note)
 
     def failure(self, case: dict, edition: str, request: Request, detail: str, expected: bytes, actual: bytes | None,
                 locate: bool = False) -> CheckResult:

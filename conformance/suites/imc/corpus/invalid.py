@@ -22,7 +22,7 @@ from .coverage import load_rules
 from .records import MessageCases
 from .oracle import decode_refusal, encode_refusal, flaws, practice_also_broken
 from .surgery import flip, payload_of, read_u16, reframe, swapped_crc, u16, with_crc
-from .valid import first_variable_field
+from .valid import BASE, first_variable_field, variable_kind
 
 UNUSED_ID = 999  # no message in IMC.xml has this id
 HIGHEST_IMC_ID = 4095  # IMC.xml assigns no id above this (checked against IMC.xml by the tests)
@@ -65,7 +65,7 @@ def add_invalid(mc: MessageCases) -> None:
                 extra["practice"] = practice
             mc.add(f"{path}/{order}", expect="invalid", clause=clauses[rule], checks=checks or [f"decode-{order}"],
                    tags=["invalid", f"rule:{rule}", f"byte-order:{order}"], frames={order: broken}, rule=rule,
-                   message=message, **extra)
+                   message=message, base=f"imc/{mdef.abbrev}/{BASE}", **extra)
 
         def followed(path, broken, **extra):
             """The broken frame, then the valid one (a stream, a log, a datagram with more after it); none where the
@@ -239,7 +239,8 @@ def add_prefix_overruns(mc: MessageCases, invalid, followed, base: dict, order: 
 
 
 def add_overflow(mc: MessageCases) -> None:
-    """A message whose first plaintext or rawdata holds 65,536 bytes: no u16 length carries it, encoders must refuse."""
+    """A message whose first plaintext or rawdata holds 65,536 bytes: no u16 length carries it, encoders must refuse.
+    Made from the valid case whose field fills the payload exactly (its base): the same fields, the text made longer."""
     f = first_variable_field(mc)
     if f is None:
         return
@@ -251,6 +252,7 @@ def add_overflow(mc: MessageCases) -> None:
     mc.add(f"payload-overflow/{f.abbrev}-65536", expect="invalid", clause=load_clauses()["payload-overflow"],
            checks=["encode-le", "encode-be"], tags=["invalid", "rule:payload-overflow", f"field:{f.abbrev}"],
            message=message, rule="payload-overflow", practice=practice,
+           base=f"imc/{mc.mdef.abbrev}/{variable_kind(f)}/{f.abbrev}/max-payload",
            comment="65,536 bytes of text: neither its u16 length nor the payload's u16 size can carry it.")
 
 

@@ -21,6 +21,7 @@ HEADER_VARIANTS = {
 # Zero timestamps: decoding them has no freedom; an encoder may write them or stamp the time of sending (class
 # zero-timestamp), so their encode and roundtrip checks are acceptable cases of their own.
 ZERO_TIMESTAMPS = ("zero", "negative-zero-timestamp")
+BASE = "filled"  # the valid case (path) every invalid case of a message is made from
 DECODE_CHECKS = ["decode-le", "decode-be"]
 PRINTABLE = "".join(chr(c) for c in range(0x20, 0x7F))
 CONTROL = "".join(chr(c) for c in (0x00, 0x09, 0x0A, 0x0D, 0x1B, 0x7F))
@@ -63,9 +64,9 @@ def add_valid(mc: MessageCases, examples: list[dict]) -> None:
                frames=frames, message=canonical, outcomes=[{"outcome": "accept"}, {"outcome": "restamp"}],
                reference="accept", **{"class": "zero-timestamp"},
                comment="A zero timestamp given to an encoder: written as given (DUNE, imcpy), or the time of sending.")
-    filled = samples.message(mdef.abbrev, samples.filled_fields(defs, mdef))
-    if mdef.fields:
-        valid("filled", filled, mdef.clause, ["filled"])
+    # every field filled, an ordinary header: the frame the invalid cases are made from (their ``base``)
+    valid(BASE, samples.message(mdef.abbrev, samples.filled_fields(defs, mdef), samples.ORDINARY_HEADER), mdef.clause,
+          ["filled"])
     for f in mdef.fields:
         for path, value, clause, tags, expect in field_variants(mc, f):
             valid(f"{path}", samples.with_field(minimal, f.abbrev, value), clause, [*tags, f"field:{f.abbrev}"],
@@ -128,13 +129,13 @@ def field_variants(mc: MessageCases, f: FieldDef):
         yield f"text/{f.abbrev}/control-ascii", CONTROL, f.clause, ["text", "class:control-ascii"], "valid"
         yield f"text/{f.abbrev}/long", (PRINTABLE * 11)[:1000], f.clause, ["text", "class:long"], "valid"
         if f is first_variable_field(mc):
-            yield f"text/{f.abbrev}/max-payload", "x" * max_fill(mc, f), "imc-wire#frame-layout", ["text", "class:max-payload", "oversize"], "valid"
+            yield f"{variable_kind(f)}/{f.abbrev}/max-payload", "x" * max_fill(mc, f), "imc-wire#frame-layout", ["text", "class:max-payload", "oversize"], "valid"
         return
     if f.type == "rawdata":
         yield f"raw/{f.abbrev}/empty", "", f.clause, ["raw", "class:empty"], "valid"
         yield f"raw/{f.abbrev}/all-bytes", bytes(range(256)).hex(), f.clause, ["raw", "class:all-bytes"], "valid"
         if f is first_variable_field(mc):
-            yield f"raw/{f.abbrev}/max-payload", "a5" * max_fill(mc, f), "imc-wire#frame-layout", ["raw", "class:max-payload", "oversize"], "valid"
+            yield f"{variable_kind(f)}/{f.abbrev}/max-payload", "a5" * max_fill(mc, f), "imc-wire#frame-layout", ["raw", "class:max-payload", "oversize"], "valid"
         return
     types = samples.inner_types(defs, f)
     if f.type == "message":
@@ -159,6 +160,11 @@ def field_variants(mc: MessageCases, f: FieldDef):
 
 def first_variable_field(mc: MessageCases) -> FieldDef | None:
     return next((f for f in mc.mdef.fields if f.type in ("plaintext", "rawdata")), None)
+
+
+def variable_kind(f: FieldDef) -> str:
+    """The path segment of a plaintext's (``text``) or rawdata's (``raw``) valid cases."""
+    return "text" if f.type == "plaintext" else "raw"
 
 
 def max_fill(mc: MessageCases, f: FieldDef, extra: int = 0) -> int:

@@ -175,7 +175,7 @@ def add_invalid(tc: TypeCases, edition: Edition, prefix: str, expect, msg: Messa
         found = flaws(edition, full, broken, rule)
         broke = {"rules": found, "why": WHY[path.split("/")[0]]} if len(found) > 1 else None
         tc.add(prefix + path, expect=expect("invalid"), clause=tc.clauses[rule], checks=DECODE, edition=edition,
-               frame=broken, rule=rule, flaws=broke,
+               frame=broken, rule=rule, flaws=broke, base=f"ros_acomms/{tc.t.name}/{prefix}filled",
                tags=["invalid", f"rule:{rule}", *tags, *(["final-blob"] if at_final else [])])
 
     cuts = {0: "empty"}
