@@ -43,6 +43,7 @@ class Finding:
     frame: bytes | None = None
     where: object = ""  # the datagram or logged frame it rests on (judge.py says where it is), or a text
     label: str | None = None  # what the report lists it as, where it is no frame (``connection 3``)
+    asker: object = None  # an exchange's finding: the datagram of the request (its addressee answers for it)
 
 
 @dataclass(slots=True)
@@ -74,5 +75,8 @@ class CaptureRules(Protocol):
 
 class ExchangeTracker(Protocol):
     def observe(self, frame: Watched) -> list[Finding]: ...
+
+    def again(self, frame: Watched) -> None:
+        """A copy of a frame observed before (delivered twice)."""
 
     def finish(self, end: float) -> list[Finding]: ...

@@ -48,6 +48,8 @@ class _Open:
     terminal: Watched | None = None
     open_end: str | None = None  # the ambiguity id when its last state is one the seeds leave open
     orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
+    copies: list = field(default_factory=list)  # the frame numbers of the request's copies (it arrived again)
+    restarts: int = 0  # copies whose replies began a sequence of states afresh
 
 
 class PassiveExchanges:
@@ -106,9 +108,29 @@ class PassiveExchanges:
 
     def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> None:
         """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
-        a log's clock jumped, a relay dropped a datagram): a request left unanswered across that time is not judged
-        (``requesters``: only the requests of these systems; None: every request)."""
+        a log's clock jumped, a relay dropped or held a datagram): an absence across that time (a request left
+        unanswered, a sequence left unended) is not judged; an answer that came is (``requesters``: only the requests
+        of these systems; None: every request). A time overlapping the last one given for the same requesters
+        extends it, so that a flood of losses takes no more room than one."""
+        if self.losses:
+            first, last, reason, systems = self.losses[-1]
+            if systems == requesters and start <= last and end >= first:
+                self.losses[-1] = (min(first, start), max(last, end), reason, systems)
+                return
         self.losses.append((start, end, why, requesters))
+
+    def again(self, w: Watched) -> None:
+        """``w`` is a copy of a request seen before (the network, or a relay, delivered it twice): its addressee may
+        answer each copy, so a second sequence of replies is no status after the terminal one, and what the seeds
+        leave open about the request is not read (INCONCLUSIVE)."""
+        for rule in self.by_request.get(w.message, ()):
+            if not _matches(w.fields, rule.when):
+                continue
+            key = tuple(hashable(w.fields.get(e["request_field"])) for e in rule.echoes)
+            for o in reversed(self.keyed.get((id(rule), key), ())):
+                if o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields):
+                    o.copies.append(w.number)
+                    return
 
     def split(self, why: str) -> tuple[list[Finding], int]:
         """The frames' clock jumped (``why``): no bound can be timed across the jump, so every exchange still open is
@@ -143,7 +165,7 @@ class PassiveExchanges:
             elif not o.answered:
                 out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
                                          f"the capture ends {end - o.request.time:.3f} s after the request, before "
-                                         f"its bound of {o.deadline - o.request.time:g} s", o.request))
+                                         f"its bound of {o.deadline - o.request.time:.3g} s", o.request))
         return out
 
     # ------------------------------------------------------------ requests
@@ -154,7 +176,9 @@ class PassiveExchanges:
         if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
                for o in same_key):
             return  # a resend of an open request is the same exchange
-        o = _Open(rule, w, key, w.time + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
+        # a relay's requester could not see the time the relay added to the request's trip and its reply's
+        deadline = w.time + rule.within + getattr(w.where, "added", 0.0)
+        o = _Open(rule, w, key, deadline, states=self._states(rule, w.fields) if rule.stateful else None)
         self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
         self.open[id(rule)].append(o)
@@ -194,6 +218,9 @@ class PassiveExchanges:
         states = o.states
         value = w.fields.get(states.field)
         out = []
+        if o.terminal is not None and len(o.copies) > o.restarts:  # the copy's own replies begin
+            o.restarts += 1
+            o.terminal = o.open_end = None
         if o.terminal is not None:
             if o.open_end is None:
                 return [self._finding(o, "after-terminal", LEVELS[states.level], states.clause,
@@ -262,17 +289,29 @@ class PassiveExchanges:
         return out
 
     def _judge_expired(self, o: _Open) -> list[Finding]:
+        """A request's findings once its bound has passed. Only an absence (no reply, no terminal state) is excused
+        by what the frames do not tell; a reply that came echoing another value is judged whatever was lost around
+        it. What the seeds leave open about a request that arrived twice is not read: the second answer may be the
+        copy's."""
         findings = self._expired(o)
+        absent = (not o.answered and not (o.orphans and o.rule.echoes)) or (o.states is not None and o.terminal is None)
         why = next((why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
-                    and (systems is None or o.request.src in systems)), None)
+                    and (systems is None or o.request.src in systems)), None) if absent else None
+        if why is None and o.copies:
+            why = f"the request arrived {len(o.copies) + 1} times (frames {o.request.number}, " \
+                  f"{', '.join(map(str, o.copies))}): its addressee may have answered each copy"
+            excused = (Verdict.NON_STRICT, Verdict.IMPL_DEFINED)
+        else:
+            excused = (Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED)
         if why is not None:
-            for f in findings:  # the reply, or the right one, may have been lost
-                if f.verdict in (Verdict.FAIL, Verdict.NON_STRICT):
+            for f in findings:  # the reply, or the right one, may have been lost; a reading rests on no absence seen
+                if f.verdict in excused:
                     f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}"
         return findings
 
     def _expired(self, o: _Open) -> list[Finding]:
-        ex, bound = o.rule.exchange, o.deadline - o.request.time
+        ex, added = o.rule.exchange, o.deadline - o.request.time - o.rule.within
+        bound = f"{o.rule.within:g} s" + (f" (and the {added:.3g} s a relay added to the way)" if added > 0 else "")
         if not o.answered:
             self.keyed[(id(o.rule), o.key)].remove(o)
             if o.orphans and o.rule.echoes:
@@ -283,16 +322,16 @@ class PassiveExchanges:
                 asked = self._name(o.request.message, e["request_field"], o.request.fields.get(e["request_field"]))
                 echoed = self._name(w.message, e["reply_field"], w.fields.get(e["reply_field"]))
                 return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
-                                      f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
+                                      f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound}; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
             silent = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence)
             if silent is not None:  # the seeds require no reply to this request: a reading, never a failure
-                return [self._reading(o, silent, f"no {ex['reply']} {self._between(o)} within {bound:g} s")]
+                return [self._reading(o, silent, f"no {ex['reply']} {self._between(o)} within {bound}")]
             return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
-                                  f"no {ex['reply']} {self._between(o)} within {bound:g} s", o.request)]
+                                  f"no {ex['reply']} {self._between(o)} within {bound}", o.request)]
         self.ended[id(o.rule)].append(o)
         if o.states is not None and o.terminal is None:
-            what = f"no terminal {ex['reply']} within {bound:g} s"
+            what = f"no terminal {ex['reply']} within {bound}"
             unended = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence,
                                       unended=True)
             if unended is not None:  # a later request reusing its identifier may have replaced it
@@ -337,7 +376,7 @@ class PassiveExchanges:
         if detail and w is not o.request:
             detail = f"request frame {o.request.number}: {detail}"
         return Finding(o.request.message, f"exchange/{o.rule.exchange['id']}/{aspect}", verdict, clause, detail,
-                       w.number, w.time, None, w.where)
+                       w.number, w.time, None, w.where, asker=o.request.where)
 
     def _between(self, o: _Open) -> str:
         """Who owed whom the reply: ``from system 30 to 19696``."""
