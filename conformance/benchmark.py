@@ -23,6 +23,8 @@ target with ``met`` or ``MISSED`` and the figure measured before the start-up wo
   ``tests/data/dune-log``, its frames again and again with later timestamps, judged with the IMC.xml beside it),
   uncompressed and gzip (whole command), and the peak memory of the whole command on a ~1 GB log beside a ~100 MB
   one (the logs are written into a temporary folder and removed);
+- the relay (once): its peak memory under a console's flood of 65,507-byte datagrams with ``--impair delay=2``
+  (``relay/flood.py``);
 - fuzzing (once each): generated messages against imcpy through hypothesis, the frame-mutation sweep against imcpy
   (beside imcpy's bare decode of such frames), the differential run of imcpy and pyimclsts (1,000 examples per
   message, whole process) and the mutants of both suites.
@@ -91,6 +93,8 @@ TARGETS = (
      "whole list ratio", "x", 1.25, None),
     ("whole protocol: run --suite imc-full --adapter imcpy, time per case vs the seed suite's", "whole ratio", "x",
      2.0, None),
+    ("relay under a flood of 65,507-byte datagrams with --impair delay=2: peak memory, whole command", "relay flood",
+     "MB", 300, None),
 )
 COUNTS: dict[str, int] = {}  # cases or frames of the rate rows, filled as they are measured
 
@@ -107,7 +111,7 @@ def target_lines(medians: dict[str, float]) -> list[str]:
             met, shown, goal = value >= bound, f"{value:,.0f} {kind}", f">= {bound:,} {kind}"
             was = f"{before:,} {kind}" if before else None
         else:
-            scale = {"ms": 1e3, "us": 1e6, "s": 1, "x": 1}[kind]
+            scale = {"ms": 1e3, "us": 1e6, "s": 1, "x": 1, "MB": 1}[kind]
             value *= scale
             met, shown, goal = value <= bound, f"{value:,.{1 if kind == 'x' else 3 if kind == 's' else 0}f} {kind}", \
                 f"<= {bound:g} {kind}"
@@ -639,7 +643,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--json", metavar="FILE", help="also write every median and target as JSON")
-    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole"):
+    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole", "relay"):
         parser.add_argument(f"--skip-{part}", action="store_true")
     args = parser.parse_args(argv)
 
@@ -665,6 +669,10 @@ def main(argv: list[str] | None = None) -> int:
         medians |= fuzz_rows(suite, everything)
     if not args.skip_whole:
         medians |= whole_rows(args.repeat)
+    if not args.skip_relay:
+        from .relay.flood import flood_rows
+
+        medians |= flood_rows(command_env())
     installed.cleanup()
     lines = target_lines(medians)
     print("\n".join(lines))

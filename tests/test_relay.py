@@ -171,6 +171,14 @@ def test_a_mistaken_impairment_is_one_line(text, message):
      "is the relay's own socket (relay)"),
     (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6011", "--via", "127.0.0.1:6011", "--duration", "0.1"],
      "is the relay's own socket (--via)"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://127.255.255.255:6002"], "the loopback network's broadcast address"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.0:6002"], "the loopback network's network address"),
+    (["udp://127.255.255.255:6010", "--vehicle", "udp://127.0.0.1:6002"], "the loopback network's broadcast address"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://127.0.0.1:6002", "--impair", "rate=0"],
+     "rate=0: a cap in bits per second above 0"),
+    (["udp://127.0.0.1:6010", "--vehicle", "udp://[::1]:6002"],
+     "--vehicle udp://[::1]:6002 and the relay's address udp://127.0.0.1:6010 are not of the same address family: "
+     "give --via [::1]:0"),
 ])
 def test_the_relay_refuses_in_one_line(argv, message, capsys):
     assert main(["relay", *argv]) == 2
@@ -189,3 +197,78 @@ def test_an_announce_is_changed_to_name_the_relay_and_nothing_else_is():
     assert codec.byte_order_of(rewrite(announce, ("127.0.0.1", 6011))) == "be"
     query = codec.encode(SUITE.defs, {"abbrev": "AcousticSystemsQuery", "header": header, "fields": {}})
     assert rewrite(query, ("127.0.0.1", 6011)) is None and rewrite(b"\x54\xfe\x97", ("127.0.0.1", 1)) is None
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_a_vehicle_that_sends_nothing_is_one_line_and_judged_on_nothing(tmp_path, capsys):
+    """No vehicle listens: the console's datagrams could not all be sent (none counted delivered as well), one line
+    says nothing came from the vehicle, exit 2, and no case blames the vehicle."""
+    import json
+    import socket
+    import threading
+
+    listen, vehicle = _free_port(), _free_port()
+    header = {"timestamp": 1.0, "src": 0x4C10, "src_ent": 0, "dst": 0x1F, "dst_ent": 0xFF}
+    query = codec.encode(SUITE.defs, {"abbrev": "AcousticSystemsQuery", "header": header, "fields": {}}, "le")
+    stop = threading.Event()
+
+    def console():
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+            while not stop.wait(0.1):
+                sock.sendto(query, ("127.0.0.1", listen))
+
+    sender = threading.Thread(target=console, daemon=True)
+    sender.start()
+    try:
+        code = main(["relay", f"udp://127.0.0.1:{listen}", "--vehicle", f"udp://127.0.0.1:{vehicle}", "--duration",
+                     "1.5", "--json", str(tmp_path / "r.json")])
+    finally:
+        stop.set()
+        sender.join()
+    err = capsys.readouterr().err
+    assert code == 2
+    said = [line for line in err.splitlines() if "nothing came from the vehicle" in line]
+    assert len(said) == 1 and f"udp://127.0.0.1:{vehicle}" in said[0]
+    result = json.loads((tmp_path / "r.json").read_text())
+    ids = [case["id"] for message in result["messages"] for case in message["cases"]]
+    assert ids and not [i for i in ids if "/by-vehicle/" in i]
+    line = next(n for n in result["notes"] if n.startswith("console to vehicle:"))
+    sent = int(line.split(": ")[1].split()[0])
+    delivered = int(line.split(", ")[1].split()[0])
+    unsent = sum(int(part.split()[0]) for part in line.split("; ")[1].split(", ") if "could not be sent" in part) \
+        if "could not be sent" in line else 0
+    assert sent > 3 and delivered + unsent == sent, line
+
+
+def test_what_a_direction_holds_in_flight_is_bounded_in_bytes():
+    """A console flooding 65,507-byte datagrams through a 2 s delay: the relay holds at most IN_FLIGHT_LIMIT bytes on
+    the way, the rest is a loss of the link, counted, and its memory stays within the bound, not the flood's size."""
+    import tracemalloc
+
+    from imc_conformance.relay.core import IN_FLIGHT_LIMIT, Relay
+
+    links = {side: Link(Impairment(delay=2.0), 0, side) for side in SIDES}
+    relay = Relay({side: judge() for side in SIDES}, links, FACING, {"console": CONSOLE, "vehicle": VEHICLE},
+                  **SUITE.relay_hooks())
+    n, size = 1600, 65_507
+    tracemalloc.start()
+    try:
+        for i in range(n):
+            relay.inbound(i / n, "console", i.to_bytes(4, "little") * (size // 4) + b"end", CONSOLE)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    held = sum(len(entry[3]) for entry in relay.queue)
+    assert held == relay.in_flight["console"] <= IN_FLIGHT_LIMIT < n * size
+    dropped = relay.counts["console"][f"over the relay's {IN_FLIGHT_LIMIT >> 20} MiB in flight (a full buffer)"]
+    assert dropped == n - len(relay.queue) > 0
+    assert peak < IN_FLIGHT_LIMIT + n * size // 4  # the flood is 105 MB; the relay holds its bound and little else
+    assert len(relay.due(10.0)) == n - dropped and relay.in_flight["console"] == 0
+    assert any(f"{dropped} over the relay's" in note for note in relay.notes())

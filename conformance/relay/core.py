@@ -256,8 +256,9 @@ def side_id(case_id: str, side: str) -> str:
     return f"{head}/relay/{side}/by-{blamed or side}/{tail}"
 
 
-def merged(results: dict[str, RunResult], strict: bool) -> RunResult:
-    """One result of both sides' results: each message's cases from both, filed under each side."""
+def merged(results: dict[str, RunResult], strict: bool, judged: tuple[str, ...] = SIDES) -> RunResult:
+    """One result of both sides' results: each message's cases from both, filed under each side; only the cases that
+    blame a side in ``judged`` (a vehicle that sent nothing is judged on nothing)."""
     first = results[SIDES[0]]
     cases: dict[str, list] = {}
     keys: dict[str, str] = {}
@@ -266,7 +267,8 @@ def merged(results: dict[str, RunResult], strict: bool) -> RunResult:
             keys.setdefault(message.name, message.key)
             for case in message.cases:
                 case.id = side_id(case.id, side)
-                cases.setdefault(message.name, []).append(case)
+                if any(f"/relay/{side}/by-{blamed}/" in case.id for blamed in judged):
+                    cases.setdefault(message.name, []).append(case)
     messages = [MessageResult(name, keys[name], message_verdict(group, strict), group) for name, group in cases.items()]
     notes = [f"{side}: {note}" for side in SIDES for note in results[side].notes]
     return RunResult(first.suite, first.title, first.edition, first.implementation, first.adapter, strict, first.started,
