@@ -200,6 +200,7 @@ class Relay:
         to, t = OTHER[side], sent.time
         src = {frame.src} if frame is not None and frame.src is not None else set(self.systems[side]) or None
         why = f"the relay did not deliver datagram {sent.number} from the {side} ({why})"
+        self.judges[side].tracker.withdraw(sent.number, why)
         self.judges[side].tracker.lost(t, until or t, why, None if src is None else frozenset(src))
         self.judges[to].tracker.lost(t, until or t, why, self._systems(to, frame))
         if frame is not None and frame.group in self.introductions and frame.src is not None:

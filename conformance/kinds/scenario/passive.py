@@ -49,6 +49,7 @@ class _Open:
     open_end: str | None = None  # the ambiguity id when its last state is one the seeds leave open
     orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
     copies: list = field(default_factory=list)  # the frame numbers of the request's copies (it arrived again)
+    undelivered: str | None = None  # why its addressee never got it (a relay did not deliver it): nothing answers it
     restarts: int = 0  # copies whose replies began a sequence of states afresh
 
 
@@ -119,6 +120,15 @@ class PassiveExchanges:
                 return
         self.losses.append((start, end, why, requesters))
 
+    def withdraw(self, number: int, why: str) -> None:
+        """The request seen as frame ``number`` never reached its addressee (``why``: a relay did not deliver it): no
+        reply answers it (a reply to a later request like it is that request's), and its absence is not judged."""
+        for queue in self.open.values():
+            for o in queue:
+                if o.request.number == number:
+                    o.undelivered = why
+                    return
+
     def again(self, w: Watched) -> None:
         """``w`` is a copy of a request seen before (the network, or a relay, delivered it twice): its addressee may
         answer each copy, so a second sequence of replies is no status after the terminal one, and what the seeds
@@ -173,8 +183,8 @@ class PassiveExchanges:
     def _request(self, rule: _Rule, w: Watched) -> None:
         key = tuple(hashable(w.fields.get(e["request_field"])) for e in rule.echoes)
         same_key = self.keyed.setdefault((id(rule), key), [])
-        if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
-               for o in same_key):
+        if any(not o.answered and o.undelivered is None and o.request.src == w.src and o.request.dst == w.dst
+               and same(o.request.fields, w.fields) for o in same_key):
             return  # a resend of an open request is the same exchange
         # a relay's requester could not see the time the relay added to the request's trip and its reply's
         deadline = w.time + rule.within + getattr(w.where, "added", 0.0)
@@ -197,7 +207,8 @@ class PassiveExchanges:
         if o is None:
             if rule.echoes:
                 for other in self.open[id(rule)]:
-                    if not other.answered and other.request.src == w.dst and self._from_node(other, w):
+                    if not other.answered and other.undelivered is None and other.request.src == w.dst \
+                            and self._from_node(other, w):
                         other.orphans.append(w)
             return None
         ex, out = rule.exchange, []
@@ -254,6 +265,8 @@ class PassiveExchanges:
         open_other = latest_mine = latest_other = None
         anyone, sender = self.anyone, w.src
         for o in mine:  # oldest first
+            if o.undelivered is not None:
+                continue
             node = o.request.dst
             if (sender == o.request.src) if node in (None, anyone, self.nobody) else (sender != node):
                 continue  # not from the system the request was for (see _from_node)
@@ -295,8 +308,9 @@ class PassiveExchanges:
         copy's."""
         findings = self._expired(o)
         absent = (not o.answered and not (o.orphans and o.rule.echoes)) or (o.states is not None and o.terminal is None)
-        why = next((why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
-                    and (systems is None or o.request.src in systems)), None) if absent else None
+        why = o.undelivered or next((why for start, end, why, systems in self.losses if start <= o.deadline and
+                                     end >= o.request.time and (systems is None or o.request.src in systems)),
+                                    None) if absent else None
         if why is None and o.copies:
             why = f"the request arrived {len(o.copies) + 1} times (frames {o.request.number}, " \
                   f"{', '.join(map(str, o.copies))}): its addressee may have answered each copy"
