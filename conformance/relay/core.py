@@ -80,7 +80,7 @@ class Relay:
             judge.tracker = _Blamed(judge.tracker, self.sender)
         self.rules = judges[SIDES[0]].rules  # the judges' rules decode the fields their exchanges watch
         self.rewrite, self.record, self.introductions = rewrite, record, introductions
-        self.unknown: dict[tuple, float] = {}  # (receiving side, system) -> when its introduction was lost
+        self.unknown: dict[tuple, list] = {}  # (receiving side, system) -> the times since its introduction was lost
         self.resend = {side: ResendWatch(judges[side].tracker.by_request, resend) for side in SIDES} if resend else None
         self.queue: list = []
         self.order = itertools.count()
@@ -203,24 +203,22 @@ class Relay:
         self.judges[side].tracker.withdraw(sent.number, why)
         self.judges[side].tracker.lost(t, until or t, why, None if src is None else frozenset(src))
         self.judges[to].tracker.lost(t, until or t, why, self._systems(to, frame))
-        if frame is not None and frame.group in self.introductions and frame.src is not None:
-            self.unknown.setdefault((to, frame.src), (t, sent.number))
+        if frame is not None and frame.group in self.introductions and frame.src is not None \
+                and (to, frame.src) not in self.unknown:  # unknown to the other side until the next one arrives
+            lost = f"the relay lost an introduction of system {frame.src:#06x} to the {to} (datagram {sent.number})"
+            self.unknown[(to, frame.src)] = [self.judges[each].tracker.lost(t, float("inf"), lost,
+                                                                            frozenset([frame.src])) for each in SIDES]
         if self.resend and frame is not None and frame.group is not None:
             self.resend[side].undelivered(sent, frame.group, frame)
 
     def _introduced(self, side: str, system: int, t: float) -> None:
-        """``side`` got an introduction of ``system`` at ``t``: since the one lost before it, the requests of
-        ``system`` that ``side`` ignored are not judged (an answer ``side`` sent is judged all the same)."""
-        since = self.unknown.pop((side, system), None)
-        if since is not None:
-            self.judges[side].tracker.lost(since[0], t, f"the relay lost an introduction of system {system:#06x} to "
-                                                        f"the {side} (datagram {since[1]})", frozenset([system]))
+        """``side`` got an introduction of ``system`` at ``t``: the requests of ``system`` that ``side`` ignored since
+        the one lost before it are not judged (an answer ``side`` sent is judged all the same); those after are."""
+        for lost in self.unknown.pop((side, system), ()):  # in both sides' views
+            lost[1] = t
 
     def finish(self, t: float) -> None:
-        """Judge what the end of the relay at ``t`` decides: the resends whose window ended, the introductions never
-        made again."""
-        for side, system in list(self.unknown):
-            self._introduced(side, system, float("inf"))
+        """Judge what the end of the relay at ``t`` decides: the resends whose window ended."""
         for side in SIDES if self.resend else ():
             for finding in self.resend[side].finish(t):
                 self._found(side, finding)

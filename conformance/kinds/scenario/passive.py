@@ -76,7 +76,7 @@ class PassiveExchanges:
         self.pairs: set[tuple] = set()  # (rule, requester, node) of every request seen
         self.senders: dict = {}  # system id -> the address and port its frames come from
         self.next_deadline = float("inf")
-        self.losses: list[tuple] = []  # (from, to, why, requesters or None): times the frames do not tell all of
+        self.losses: list[list] = []  # [from, to, why, requesters or None]: times the frames do not tell all of
 
     @property
     def messages(self) -> set[str]:
@@ -107,18 +107,20 @@ class PassiveExchanges:
         return any(_matches(w.fields, rule.reply_when) and (id(rule), w.dst, w.src) in self.pairs
                    for rule in self.by_reply.get(w.message, ()))
 
-    def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> None:
+    def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> list:
         """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
         a log's clock jumped, a relay dropped or held a datagram): an absence across that time (a request left
         unanswered, a sequence left unended) is not judged; an answer that came is (``requesters``: only the requests
         of these systems; None: every request). A time overlapping the last one given for the same requesters
-        extends it, so that a flood of losses takes no more room than one."""
-        if self.losses:
-            first, last, reason, systems = self.losses[-1]
-            if systems == requesters and start <= last and end >= first:
-                self.losses[-1] = (min(first, start), max(last, end), reason, systems)
-                return
-        self.losses.append((start, end, why, requesters))
+        extends it, so that a flood of losses takes no more room than one. The time's entry, whose end (index 1) a
+        caller may move once it knows it (``end`` infinite until then)."""
+        if self.losses and end != float("inf"):
+            last = self.losses[-1]
+            if last[3] == requesters and last[1] != float("inf") and start <= last[1] and end >= last[0]:
+                last[0], last[1] = min(last[0], start), max(last[1], end)
+                return last
+        self.losses.append([start, end, why, requesters])
+        return self.losses[-1]
 
     def withdraw(self, number: int, why: str) -> None:
         """The request seen as frame ``number`` never reached its addressee (``why``: a relay did not deliver it): no
@@ -175,7 +177,7 @@ class PassiveExchanges:
             elif not o.answered:
                 out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
                                          f"the capture ends {end - o.request.time:.3f} s after the request, before "
-                                         f"its bound of {o.deadline - o.request.time:.3g} s", o.request))
+                                         f"its bound of {_bound(o)}", o.request))
         return out
 
     # ------------------------------------------------------------ requests
@@ -324,8 +326,7 @@ class PassiveExchanges:
         return findings
 
     def _expired(self, o: _Open) -> list[Finding]:
-        ex, added = o.rule.exchange, o.deadline - o.request.time - o.rule.within
-        bound = f"{o.rule.within:g} s" + (f" (and the {added:.3g} s a relay added to the way)" if added > 0 else "")
+        ex, bound = o.rule.exchange, _bound(o)
         if not o.answered:
             self.keyed[(id(o.rule), o.key)].remove(o)
             if o.orphans and o.rule.echoes:
@@ -414,6 +415,12 @@ class PassiveExchanges:
                      values(ex["reply"], ex.get("reply_when", {})),
                      [c for c in ex["correlation"] if c["kind"] == "echo"], "state" in ex,
                      seconds(ex["within"], self.bounds) * scale)
+
+
+def _bound(o: _Open) -> str:
+    """A request's bound in words: ``5 s``, or ``5 s (and the 4 s a relay added to the way)``."""
+    added = o.deadline - o.request.time - o.rule.within
+    return f"{o.rule.within:g} s" + (f" (and the {added:.3g} s a relay added to the way)" if added > 1e-9 else "")
 
 
 def _matches(fields: dict, when: dict[str, frozenset]) -> bool:
