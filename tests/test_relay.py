@@ -272,3 +272,28 @@ def test_what_a_direction_holds_in_flight_is_bounded_in_bytes():
     assert peak < IN_FLIGHT_LIMIT + n * size // 4  # the flood is 105 MB; the relay holds its bound and little else
     assert len(relay.due(10.0)) == n - dropped and relay.in_flight["console"] == 0
     assert any(f"{dropped} over the relay's" in note for note in relay.notes())
+
+
+def test_a_console_sending_from_many_ports_is_answered_where_its_announce_says():
+    """imcpy sends each datagram from a socket of its own and asks, in its Announce, to be answered at its listening
+    socket: the relay takes the console's datagrams from any port that speaks as one of its systems, and sends the
+    vehicle's where the Announce said; a stranger speaking as another system is not the console."""
+    from imc_conformance.relay.core import Relay
+
+    links = {side: Link(Impairment(), 0, side) for side in SIDES}
+    relay = Relay({side: judge() for side in SIDES}, links, FACING, {"console": None, "vehicle": VEHICLE},
+                  **SUITE.relay_hooks())
+
+    def frame(abbrev: str, src: int, fields: dict) -> bytes:
+        header = {"timestamp": 1.0, "src": src, "src_ent": 0, "dst": 0xFFFF, "dst_ent": 0xFF}
+        return codec.encode(SUITE.defs, {"abbrev": abbrev, "header": header, "fields": fields}, "le")
+
+    announce = frame("Announce", 0x3334, {"sys_name": "ccu-imcpy", "sys_type": 0, "owner": 0xFFFF, "lat": 0.0,
+                                          "lon": 0.0, "height": 0.0, "services": "imc+udp://127.0.0.1:7777/"})
+    query, stranger = frame("AcousticSystemsQuery", 0x3334, {}), frame("AcousticSystemsQuery", 0x9999, {})
+    assert relay.accepts("console", ("127.0.0.1", 40001), announce)
+    relay.inbound(0.0, "console", announce, ("127.0.0.1", 40001))
+    assert relay.endpoints["console"] == ("127.0.0.1", 7777)
+    assert relay.accepts("console", ("127.0.0.1", 40002), query)
+    assert not relay.accepts("console", ("127.0.0.1", 40003), stranger)
+    assert not relay.accepts("vehicle", ("127.0.0.1", 40004), query) and relay.accepts("vehicle", VEHICLE, query)

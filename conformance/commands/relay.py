@@ -148,7 +148,7 @@ def command(args) -> int:
     stopping: list[int] = []
     handlers = {sig: signal.signal(sig, lambda signum, frame: stopping.append(signum))
                 for sig in (signal.SIGINT, signal.SIGTERM)}
-    io = _Io(sockets, vehicle, relay, offset)
+    io = _Io(sockets, relay, offset)
     try:
         shown_at = began
         while not stopping and time.monotonic() < end:
@@ -192,8 +192,8 @@ def command(args) -> int:
 class _Io:
     """The relay's two sockets: what arrives is handed to the relay, what it says is due is sent."""
 
-    def __init__(self, sockets: dict, vehicle: tuple, relay, offset: float):
-        self.sockets, self.vehicle, self.relay, self.offset = sockets, vehicle, relay, offset
+    def __init__(self, sockets: dict, relay, offset: float):
+        self.sockets, self.relay, self.offset = sockets, relay, offset
         self.strangers = 0  # datagrams from neither side (another sender on the listen port, or not the vehicle)
         self.kernel = {side: 0 for side in sockets}  # datagrams the kernel dropped on each socket
 
@@ -214,7 +214,7 @@ class _Io:
                     for judge in self.relay.judges.values():
                         judge.losses(now, now, dropped - self.kernel[side])
                     self.kernel[side] = dropped
-                if not self._expected(side, source[:2]):
+                if not self.relay.accepts(side, source[:2], data):
                     self.strangers += 1
                     continue
                 self.relay.inbound(now, side, data, source[:2])
@@ -226,12 +226,6 @@ class _Io:
         except OSError:
             return False
         return True
-
-    def _expected(self, side: str, source: tuple) -> bool:
-        if side == "vehicle":
-            return source == self.vehicle[:2]
-        known = self.relay.endpoints["console"]
-        return known is None or known == source
 
     def notes(self) -> list[str]:
         out = [f"{self.strangers} datagrams from neither the console nor the vehicle were dropped"] if self.strangers else []

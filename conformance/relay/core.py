@@ -71,11 +71,15 @@ class Relay:
     replies come back through the relay (an announced address), or None; ``resend``: the (ambiguity, clause) under
     which a requester's resending is recorded, or None; ``introductions``: the messages by which a system makes
     itself known to a peer (one lost, the peer may rightly ignore the system until the next arrives);
-    ``record(t, src, dst, data, comment)``: the recording."""
+    ``record(t, src, dst, data, comment)``: the recording; ``reply_to(data)``: the address a datagram asks to be
+    answered at (a side the relay learns, the console, is then sent to there, not to where it sent from)."""
 
     def __init__(self, judges: dict, links: dict[str, Link], facing: dict[str, tuple], endpoints: dict[str, tuple | None],
-                 rewrite=None, resend: tuple[str, str] | None = None, introductions=frozenset(), record=None):
+                 rewrite=None, resend: tuple[str, str] | None = None, introductions=frozenset(), record=None,
+                 reply_to=None):
         self.judges, self.links, self.facing, self.endpoints = judges, links, facing, dict(endpoints)
+        self.reply_to = reply_to
+        self.sources: dict[str, tuple | None] = {side: None for side in SIDES}  # the first address each side sent from
         for judge in judges.values():
             judge.tracker = _Blamed(judge.tracker, self.sender)
         self.rules = judges[SIDES[0]].rules  # the judges' rules decode the fields their exchanges watch
@@ -105,10 +109,25 @@ class Relay:
     def deadline(self) -> float | None:
         return self.queue[0][0] if self.queue else None
 
+    def accepts(self, side: str, source: tuple, data: bytes) -> bool:
+        """Whether a datagram that came from ``source`` on the socket facing ``side`` is that side's: the vehicle's
+        from its address only; the console's from the first address that spoke, or from any other whose frame
+        speaks as one of the console's systems (a node may send each datagram from a socket of its own)."""
+        first = self.sources[side]
+        if first is None or first == source:
+            return side == "console" or source == self.endpoints[side]
+        if side == "vehicle":
+            return False
+        frame = self.rules.frame(data)
+        return frame is not None and frame.src is not None and frame.src in self.systems[side]
+
     def inbound(self, t: float, side: str, data: bytes, source: tuple) -> None:
         """A datagram ``side`` sent at ``t`` from ``source``."""
-        if self.endpoints[side] is None:
-            self.endpoints[side] = source
+        if self.sources[side] is None:
+            self.sources[side] = source
+        if self.endpoints[side] is None or (side == "console" and self.endpoints[side] == self.sources[side]):
+            asked = self.reply_to(data) if self.reply_to is not None else None
+            self.endpoints[side] = asked or self.endpoints[side] or source
         origin, relay, to = source, self.facing[side], OTHER[side]
         self.counts[side]["sent"] += 1
         if self.record:
