@@ -306,14 +306,14 @@ class PassiveExchanges:
     def _judge_expired(self, o: _Open) -> list[Finding]:
         """A request's findings once its bound has passed. Only an absence (no reply, no terminal state) is excused
         by what the frames do not tell; a reply that came echoing another value is judged whatever was lost around
-        it. What the seeds leave open about a request that arrived twice is not read: the second answer may be the
-        copy's."""
+        it. What the seeds leave open about an answered request that arrived twice is not read: the second answer may
+        be the copy's."""
         findings = self._expired(o)
         absent = (not o.answered and not (o.orphans and o.rule.echoes)) or (o.states is not None and o.terminal is None)
         why = o.undelivered or next((why for start, end, why, systems in self.losses if start <= o.deadline and
                                      end >= o.request.time and (systems is None or o.request.src in systems)),
                                     None) if absent else None
-        if why is None and o.copies:
+        if why is None and o.copies and o.answered:  # a copy adds answers; it never takes one away
             why = f"the request arrived {len(o.copies) + 1} times (frames {o.request.number}, " \
                   f"{', '.join(map(str, o.copies))}): its addressee may have answered each copy"
             excused = (Verdict.NON_STRICT, Verdict.IMPL_DEFINED)
