@@ -50,6 +50,7 @@ class _Open:
     orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
     copies: list = field(default_factory=list)  # the frame numbers of the request's copies (it arrived again)
     undelivered: str | None = None  # why its addressee never got it (a relay did not deliver it): nothing answers it
+    expired: bool = False  # its bound passed unanswered: a reply echoing it is late (judged then), not another's
     restarts: int = 0  # copies whose replies began a sequence of states afresh
 
 
@@ -207,6 +208,8 @@ class PassiveExchanges:
             mine = (o for o in self.open[id(rule)] if o.request.src == w.dst or w.dst == self.anyone)
         o = self._answered_by(mine, w)
         if o is None:
+            if rule.echoes and any(p.expired and p.request.src == w.dst and self._from_node(p, w) for p in mine):
+                return []  # a late reply to a request judged when its bound passed
             if rule.echoes:
                 for other in self.open[id(rule)]:
                     if not other.answered and other.undelivered is None and other.request.src == w.dst \
@@ -267,7 +270,7 @@ class PassiveExchanges:
         open_other = latest_mine = latest_other = None
         anyone, sender = self.anyone, w.src
         for o in mine:  # oldest first
-            if o.undelivered is not None:
+            if o.undelivered is not None or o.expired:
                 continue
             node = o.request.dst
             if (sender == o.request.src) if node in (None, anyone, self.nobody) else (sender != node):
@@ -328,7 +331,8 @@ class PassiveExchanges:
     def _expired(self, o: _Open) -> list[Finding]:
         ex, bound = o.rule.exchange, _bound(o)
         if not o.answered:
-            self.keyed[(id(o.rule), o.key)].remove(o)
+            o.expired = True  # kept one more bound, so that a late reply is known for its own
+            self.ended[id(o.rule)].append(o)
             if o.orphans and o.rule.echoes:
                 w = o.orphans[0]
                 e = next((e for e in o.rule.echoes if not same(w.fields.get(e["reply_field"]),
@@ -369,7 +373,7 @@ class PassiveExchanges:
         if not any("reuses" in r or "reused" in r for r in ex.get("silence", ())):
             return facts
         rid, mine = id(o.rule), o.request
-        others = [p for p in (*self.open[rid], *self.ended[rid]) if p is not o
+        others = [p for p in (*self.open[rid], *self.ended[rid]) if p is not o and not p.expired
                   and p.request.src == mine.src and p.request.dst == mine.dst]
         for fact, chosen in (("reuses", [p for p in others if p.request.number < mine.number]),
                              ("reused", [p for p in others if p.request.number > mine.number and p.answered])):
