@@ -69,8 +69,7 @@ def relay_flood(seconds: float = SECONDS, env: dict | None = None) -> dict[str, 
     read = int(line.split(": ", 1)[1].split()[0])
     dropped = next((int(part.split()[0]) for part in line.split("; ")[1].split(", ") if "in flight" in part), 0) \
         if "; " in line else 0
-    return {"peak MB": int(peak) * 1024 / 1e6, "sent": sent, "read": read, "bound dropped": dropped,
-            "bound MB": IN_FLIGHT_LIMIT / 1e6}
+    return {"peak MB": int(peak) * 1024 / 1e6, "sent": sent, "read": read, "bound dropped": dropped}
 
 
 def flood_rows(env: dict | None = None) -> dict[str, float]:
@@ -78,5 +77,5 @@ def flood_rows(env: dict | None = None) -> dict[str, float]:
     got = relay_flood(env=env)
     print(f"relay flood: --impair delay=2, {got['sent']:,} datagrams of {DATAGRAM:,} bytes sent in {SECONDS:g} s "
           f"({got['sent'] * DATAGRAM / 1e9:.1f} GB), {got['read']:,} read by the relay, {got['bound dropped']:,} "
-          f"dropped by its {got['bound MB']:.0f} MB in-flight bound per direction; peak memory {got['peak MB']:.0f} MB")
+          f"dropped by its {IN_FLIGHT_LIMIT >> 20} MiB in-flight bound per direction; peak memory {got['peak MB']:.0f} MB")
     return {"relay flood": got["peak MB"]}

@@ -23,6 +23,7 @@ from .wire import Parsed
 
 LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT, "INFO": Verdict.IMPL_DEFINED}
 STATE_CACHE = 1024  # request values whose reply states are kept resolved
+LOSS_GAP = 0.1  # s between two times the frames do not tell all of, below which they are one time
 
 
 @dataclass
@@ -112,12 +113,12 @@ class PassiveExchanges:
         """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
         a log's clock jumped, a relay dropped or held a datagram): an absence across that time (a request left
         unanswered, a sequence left unended) is not judged; an answer that came is (``requesters``: only the requests
-        of these systems; None: every request). A time overlapping the last one given for the same requesters
-        extends it, so that a flood of losses takes no more room than one. The time's entry, whose end (index 1) a
+        of these systems; None: every request). A time overlapping the last one given for the same requesters, or
+        within LOSS_GAP of it, extends it, so that a flood of losses takes no more room than one. The time's entry, whose end (index 1) a
         caller may move once it knows it (``end`` infinite until then)."""
         if self.losses and end != float("inf"):
             last = self.losses[-1]
-            if last[3] == requesters and last[1] != float("inf") and start <= last[1] and end >= last[0]:
+            if last[3] == requesters and last[1] != float("inf") and start <= last[1] + LOSS_GAP and end >= last[0]:
                 last[0], last[1] = min(last[0], start), max(last[1], end)
                 return last
         self.losses.append([start, end, why, requesters])
