@@ -62,6 +62,14 @@ def test_on_any_impairment_a_correct_pair_gets_no_fail_and_a_broken_one_its_brea
         assert all("/by-vehicle/" in c for c in failed(result))
 
 
+def test_a_late_reply_to_a_resent_query_is_no_wrong_echo():
+    """A query resent while the first was open, its bound passed before the reply to the resend came (a normal
+    jitter's tail): that reply is late, not a wrong echo of the requester's next query (found by a sweep)."""
+    link = Impairment(loss=0.185, delay=2.628, jitter=0.558, distribution="normal", duplicate=0.0095, reorder=0.118)
+    _, _, result = simulate(120, {side: link for side in SIDES}, seed=33413)
+    assert not failed(result)
+
+
 def test_a_vehicle_answering_in_1_2_s_through_2_s_of_delay_each_way_gets_no_fail():
     """The console sees each reply 5.2 s after its query, past the 5 s bound; the relay added 4 s of that."""
     _, console, result = simulate(120, {side: Impairment(delay=2.0) for side in SIDES}, after=1.2)

@@ -85,6 +85,7 @@ class Relay:
         self.rules = judges[SIDES[0]].rules  # the judges' rules decode the fields their exchanges watch
         self.rewrite, self.record, self.introductions = rewrite, record, introductions
         self.unknown: dict[tuple, list] = {}  # (receiving side, system) -> the times since its introduction was lost
+        self.introduced: set[tuple] = set()  # (receiving side, system) of every introduction delivered
         self.resend = {side: ResendWatch(judges[side].tracker.by_request, resend) for side in SIDES} if resend else None
         self.queue: list = []
         self.order = itertools.count()
@@ -155,6 +156,10 @@ class Relay:
             self._undelivered(sent, side, frame, fate.dropped)
             return
         self.in_flight[side] += size
+        if frame is not None and frame.group in self.introductions and frame.src is not None \
+                and (to, frame.src) not in self.introduced:  # a request overtaking it may find the system unknown
+            self._unknown(to, frame.src, t, f"the relay had not yet delivered an introduction of system "
+                                            f"{frame.src:#06x} to the {to} (datagram {sent.number})")
         for when, copy, note in fate.copies:
             heapq.heappush(self.queue, (when, next(self.order), to, copy, note, sent, frame))
             for what in filter(None, note.split(", ")):
@@ -222,17 +227,23 @@ class Relay:
         self.judges[side].tracker.withdraw(sent.number, why)
         self.judges[side].tracker.lost(t, until or t, why, None if src is None else frozenset(src))
         self.judges[to].tracker.lost(t, until or t, why, self._systems(to, frame))
-        if frame is not None and frame.group in self.introductions and frame.src is not None \
-                and (to, frame.src) not in self.unknown:  # unknown to the other side until the next one arrives
-            lost = f"the relay lost an introduction of system {frame.src:#06x} to the {to} (datagram {sent.number})"
-            self.unknown[(to, frame.src)] = [self.judges[each].tracker.lost(t, float("inf"), lost,
-                                                                            frozenset([frame.src])) for each in SIDES]
+        if frame is not None and frame.group in self.introductions and frame.src is not None:
+            self._unknown(to, frame.src, t, f"the relay lost an introduction of system {frame.src:#06x} to the {to} "
+                                            f"(datagram {sent.number})")
         if self.resend and frame is not None and frame.group is not None:
             self.resend[side].undelivered(sent, frame.group, frame)
+
+    def _unknown(self, side: str, system: int, t: float, why: str) -> None:
+        """From ``t``, ``system`` may be unknown to ``side`` (``why``), until an introduction of it reaches ``side``:
+        the requests ``system`` sends meanwhile, which ``side`` may rightly ignore, are not judged, in both views."""
+        if (side, system) not in self.unknown:
+            self.unknown[(side, system)] = [self.judges[each].tracker.lost(t, float("inf"), why, frozenset([system]))
+                                            for each in SIDES]
 
     def _introduced(self, side: str, system: int, t: float) -> None:
         """``side`` got an introduction of ``system`` at ``t``: the requests of ``system`` that ``side`` ignored since
         the one lost before it are not judged (an answer ``side`` sent is judged all the same); those after are."""
+        self.introduced.add((side, system))
         for lost in self.unknown.pop((side, system), ()):  # in both sides' views
             lost[1] = t
 
