@@ -45,7 +45,8 @@ def test_a_break_that_answers_wrongly_fails_through_a_link_losing_30_percent(bro
     assert not [case for case in failed(result) if "/by-console/" in case]
 
 
-@settings(max_examples=40, deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=40, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
 @given(loss=st.floats(0, 0.45), delay=st.floats(0, 3), duplicate=st.floats(0, 0.3), reorder=st.floats(0, 0.3),
        jitter=st.floats(0, 1), distribution=st.sampled_from(["uniform", "normal", "exponential"]),
        seed=st.integers(0, 2**16), broken=st.sampled_from([None, *WRONG]))
