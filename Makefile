@@ -100,7 +100,8 @@ dune-conformance: dune
 # DUNE against DUNE through the relay in a private network namespace: DUNE's lauv-simulator-1 configuration as two
 # systems of their own (lauv-xplore-3 the vehicle, lauv-xplore-2 the console), a minute over a clean link and a minute
 # losing 30% of the datagrams each way with a 2 s delay; then the same two links with the suite's own session (its
-# HistoricDataQuery scenarios) as the console (reports/dune-relay-[session-]{clean,impaired}.*). Never in CI.
+# HistoricDataQuery scenarios), then an imcpy actor, as the console (reports/dune-relay-[session-|imcpy-]{clean,impaired}.*).
+# Never in CI.
 dune-relay: dune
 	$(VENV)/bin/python -m imc_conformance.suites.imc.dune relay
 

@@ -18,15 +18,17 @@ EPOCH = 1_700_000_000.0
 QUERIES = (("AcousticSystemsQuery", {}), ("LblConfig", {"op": 1, "beacons": []}),
            ("HistoricDataQuery", {"type": 1, "max_size": 1000, "data": None}))
 SUITE = load()
+RANGE_OP = next(e.value for e in SUITE.defs.by_abbrev["AcousticOperation"].fields[0].enum_values if e.abbrev == "RANGE")
+RANGES = (("AcousticOperation", {"op": RANGE_OP, "system": "imc-peer-1", "range": 0.0, "msg": None}),)  # stateful
 
 
 class Console:
     """The suite's peer logic as a console: every ``every`` seconds a query (in turn from its two systems), resent
     after ``retry`` seconds without its reply, up to ``tries`` times in all (``tries=1``: never resent)."""
 
-    def __init__(self, tries: int = 4, every: float = 3.0, retry: float = 5.0):
+    def __init__(self, tries: int = 4, every: float = 3.0, retry: float = 5.0, queries=QUERIES):
         defs = SUITE.defs
-        self.defs, self.tries, self.every, self.retry = defs, tries, every, retry
+        self.defs, self.tries, self.every, self.retry, self.queries = defs, tries, every, retry, queries
         self.peer = ImcPeer(defs, system=0x4C10, node=None, service="imc+udp://127.0.0.1:6001/", host=CONSOLE[0],
                             epoch=lambda t: EPOCH + t)
         self.started = False
@@ -69,7 +71,7 @@ class Console:
         if t >= self.next_query and self.peer.node is not None:
             self.next_query = t + self.every
             n = next(self.count)
-            abbrev, fields = QUERIES[n % len(QUERIES)]
+            abbrev, fields = self.queries[n % len(self.queries)]
             fields = dict(fields, req_id=n) if abbrev == "HistoricDataQuery" else fields
             src = self.peer.system if n % 2 == 0 else self.peer.other
             self.waiting[n] = [t + self.retry, self.tries - 1, abbrev, fields, src]
@@ -98,9 +100,10 @@ def judge() -> CaptureJudge:
 
 
 def simulate(seconds: float, impair: dict | None = None, seed: int = 0, console: Console | None = None,
-             broken: str | None = None, log: list | None = None, record=None):
+             broken: str | None = None, log: list | None = None, record=None, after: float = 0.0):
     """Run a console and a reference node through the relay for ``seconds`` of virtual time; the relay, the
-    console and the merged result. ``log`` collects (time, side, 'sent' or 'received', data, delivered intact)."""
+    console and the merged result. ``log`` collects (time, side, 'sent' or 'received', data, delivered intact);
+    ``after``: seconds the vehicle takes before each datagram it sends (a slow vehicle)."""
     impair = impair or {}
     console = console or Console()
     links = {side: Link(impair.get(side, Impairment()), seed, side) for side in SIDES}
@@ -109,16 +112,18 @@ def simulate(seconds: float, impair: dict | None = None, seed: int = 0, console:
     node = ReferenceNode(SUITE.defs, SUITE.behaviour, edition=SUITE.editions[0], address=VEHICLE, broken=broken,
                          epoch0=EPOCH)
     t = 0.0
+    outbox: list[tuple[float, bytes]] = []  # what the slow vehicle has yet to send
     while t <= seconds:
         for data in console.due(t):
             if log is not None:
                 log.append((t, "console", "sent", data, True))
             relay.inbound(t, "console", data, CONSOLE)
-        for destination, data in node.due(t):
-            if destination == FACING["vehicle"]:
-                if log is not None:
-                    log.append((t, "vehicle", "sent", data, True))
-                relay.inbound(t, "vehicle", data, VEHICLE)
+        outbox += [(t + after, data) for destination, data in node.due(t) if destination == FACING["vehicle"]]
+        while outbox and outbox[0][0] <= t:
+            data = outbox.pop(0)[1]
+            if log is not None:
+                log.append((t, "vehicle", "sent", data, True))
+            relay.inbound(t, "vehicle", data, VEHICLE)
         for to, data in relay.due(t):
             if log is not None:
                 log.append((t, to, "received", data, True))
@@ -126,7 +131,8 @@ def simulate(seconds: float, impair: dict | None = None, seed: int = 0, console:
                 console.receive(t, data)
             else:
                 node.receive(t, data, FACING["vehicle"])
-        times = [x for x in (console.deadline, node.deadline, relay.deadline) if x is not None]
+        times = [x for x in (console.deadline, node.deadline, relay.deadline, outbox[0][0] if outbox else None)
+                 if x is not None]
         t = max(t + 1e-6, min(times)) if times else seconds + 1
     relay.finish(t)
     results = {side: relay.judges[side].result(implementation=f"relay {side}", started="2026-01-01T00:00:00+00:00",

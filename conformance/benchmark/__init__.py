@@ -26,6 +26,8 @@ target with ``met`` or ``MISSED`` and the figure measured before the start-up wo
 - fuzzing (once each): generated messages against imcpy through hypothesis, the frame-mutation sweep against imcpy
   (beside imcpy's bare decode of such frames), the differential run of imcpy and pyimclsts (1,000 examples per
   message, whole process) and the mutants of both suites;
+- the relay (once): its peak memory under a console's flood of 65,507-byte datagrams with ``--impair delay=2``
+  (``relay/flood.py``);
 - the reference node under a flood of HistoricSamples (``suites/imc/node/flood.py``): its slowest reply and its peak
   memory.
 

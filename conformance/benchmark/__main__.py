@@ -13,7 +13,7 @@ from . import __doc__ as DOC
 from .fuzzing import fuzz_rows
 from .inprocess import library_rows, ros_rows
 from .live import live_rows
-from .measure import COUNTS, EDITION, install_wheel
+from .measure import COUNTS, EDITION, command_env, install_wheel
 from .programs import subprocess_rows
 from .recordings import capture_rows, log_rows
 from .startup import startup_rows
@@ -26,7 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--per-case-sample", type=int, default=40, help="cases run with one process each")
     parser.add_argument("--json", metavar="FILE", help="also write every median and target as JSON")
-    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole", "node-flood"):
+    for part in ("startup", "subprocess", "ros", "live", "robustness", "capture", "logs", "fuzz", "whole", "node-flood", "relay"):
         parser.add_argument(f"--skip-{part}", action="store_true")
     args = parser.parse_args(argv)
 
@@ -55,6 +55,9 @@ def main(argv: list[str] | None = None) -> int:
     if not args.skip_node_flood:
         from ..suites.imc.node.flood import flood_rows
         medians |= flood_rows()
+    if not args.skip_relay:
+        from ..relay.flood import flood_rows as relay_flood_rows
+        medians |= relay_flood_rows(command_env())
     installed.cleanup()
     lines = target_lines(medians)
     print("\n".join(lines))

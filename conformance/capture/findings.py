@@ -43,6 +43,7 @@ class Finding:
     frame: bytes | None = None
     where: object = ""  # the datagram or logged frame it rests on (judge.py says where it is), or a text
     label: str | None = None  # what the report lists it as, where it is no frame (``connection 3``)
+    asker: object = None  # an exchange's finding: the datagram of the request (its addressee answers for it)
 
 
 @dataclass(slots=True)
@@ -84,5 +85,8 @@ class ExchangeTracker(Protocol):
         """Judge every exchange whose bound has passed by ``now`` (a clock that runs without watched frames)."""
 
     def split(self, why: str) -> tuple[list[Finding], int]: ...
+
+    def again(self, frame: Watched) -> None:
+        """A copy of a frame observed before (delivered twice)."""
 
     def finish(self, end: float) -> list[Finding]: ...

@@ -101,10 +101,11 @@ class CaptureJudge:
             return
         self._judge_datagram(got, source)
 
-    def received(self, got: Datagram) -> None:
-        """Judge a datagram a socket received (each is a record of its own)."""
+    def received(self, got: Datagram, frames: bool = True) -> None:
+        """Judge a datagram a socket received (each is a record of its own); ``frames=False``: follow the exchanges
+        through it without judging its frame (a relay's side judges the frames that side sent, not those it got)."""
         self._saw(got.time)
-        self._judge_datagram(got)
+        self._judge_datagram(got, frames=frames)
 
     def _saw(self, t: float) -> None:
         """Count a record seen at time ``t``: the capture's first and last times."""
@@ -174,7 +175,7 @@ class CaptureJudge:
             self.source = source
             self.sources.add(source)
 
-    def _judge_datagram(self, got: Datagram, source: str = "") -> None:
+    def _judge_datagram(self, got: Datagram, source: str = "", frames: bool = True) -> None:
         """Judge one UDP datagram of a record (``feed``) or of a socket (``received``)."""
         self._from(source)
         recorded = got.comment is not None and self.keep_commented  # a datagram of a recorded run: on its ports
@@ -195,12 +196,16 @@ class CaptureJudge:
         if recorded and got.comment.endswith(DAMAGED):  # a scenario's invalid frame: the node's answer is judged
             self.skipped["frames a scenario of the recorded run damaged on purpose"] += 1
             return
-        self._judge_unit(got, deliberate)
+        self._judge_unit(got, deliberate, frames=frames)
 
-    def _judge_unit(self, got: Datagram | Logged, deliberate: bool, channel=None) -> None:
+    def _judge_unit(self, got: Datagram | Logged, deliberate: bool, channel=None, frames: bool = True) -> None:
         """Judge the frame a datagram or a log holds (``channel``: what judges a logged frame that does not name its
-        message), and follow the exchanges through it."""
+        message; ``frames=False``: only follow the exchanges through it), and follow the exchanges through it."""
         frame = self.rules.frame(got.payload) if channel is None else channel.frame(got.payload)
+        if not frames:
+            if frame is not None and frame.fields is not None and frame.rule is None and self.flood is None:
+                self._exchanges(got, frame)
+            return
         if self.plain and frame is not None and frame.rule is None and frame.fields is None and not deliberate \
                 and not got.cut and not self.corpus_limit:
             valid = self.valid.get(frame.group)  # the common case: a valid frame no exchange, filter or corpus needs
@@ -229,17 +234,22 @@ class CaptureJudge:
         elif not deliberate:
             self.skipped["outside the selection"] += 1
         if frame.fields is not None and frame.rule is None and not got.cut and self.flood is None:
-            if got.payload in self.recent:  # the network duplicated it: one frame for the exchanges
-                self.duplicates += 1
-                return
-            self.recent[got.payload] = None
-            if len(self.recent) > RECENT:
-                del self.recent[next(iter(self.recent))]
-            watched = Watched(got.number, got.time, group, frame.fields, frame.src, frame.dst, got)
-            if self.clocks is None:
-                self._observe(watched)
-            else:
-                self.clocks.watch(watched)
+            self._exchanges(got, frame)
+
+    def _exchanges(self, got: Datagram | Logged, frame) -> None:
+        """Follow the exchanges through a valid frame an exchange watches."""
+        watched = Watched(got.number, got.time, frame.group, frame.fields, frame.src, frame.dst, got)
+        if got.payload in self.recent:  # the network duplicated it: one frame for the exchanges
+            self.duplicates += 1
+            self.tracker.again(watched)
+            return
+        self.recent[got.payload] = None
+        if len(self.recent) > RECENT:
+            del self.recent[next(iter(self.recent))]
+        if self.clocks is None:
+            self._observe(watched)
+        else:
+            self.clocks.watch(watched)
 
     def _judge_frame(self, group: str, frame, got: Datagram | Logged) -> None:
         """Tally a frame's verdict (and keep it for the corpus an adapter decodes)."""

@@ -153,7 +153,8 @@ class Suite(ABC):
         """What the relay (``relay.core.Relay``) needs of the suite, as its keyword arguments: ``rewrite(data,
         facing)``, a datagram changed so that replies come back through the relay; ``resend``, the (ambiguity, clause)
         under which a requester's resending of a lost request is recorded; ``introductions``, the messages by which a
-        system makes itself known. None of them for a suite that needs none."""
+        system makes itself known; ``reply_to(data)``, the (host, port) a datagram asks replies to be sent to (an
+        announced address), or None. None of them for a suite that needs none."""
         return {}
 
     def log_reader(self, edition: str | None = None):

@@ -18,7 +18,8 @@ class Impairment:
     losses (Gilbert-Elliott; 0: each datagram drawn alone); ``delay``: seconds added to every datagram, plus a draw of
     ``jitter`` seconds from ``distribution``; ``duplicate``: the share sent twice; ``reorder``: the share held back
     ``hold`` seconds (the ones after it overtake it); ``corrupt``: the share with one byte changed; ``rate``: bits per
-    second (0: no cap); ``down``: windows (start, end) in seconds from the relay's start when nothing passes."""
+    second (0, the default: no cap; ``parse`` refuses rate=0 given); ``down``: windows (start, end) in seconds from
+    the relay's start when nothing passes."""
 
     loss: float = 0.0
     burst: float = 0.0
@@ -35,6 +36,12 @@ class Impairment:
     @property
     def none(self) -> bool:
         return self == Impairment()
+
+    @property
+    def usual(self) -> float:
+        """The most this link usually adds to a datagram's way (its delay, a hold, a uniform jitter): a datagram held
+        longer (an unbounded jitter's tail, a capped link's queue) is held beyond the usual."""
+        return self.delay + (self.hold if self.reorder else 0.0) + (self.jitter if self.distribution == "uniform" else 0.0)
 
     def describe(self) -> dict:
         """What the provenance records: the settings that differ from a clean link."""
@@ -69,6 +76,8 @@ def parse(text: str) -> Impairment:
                 raise ValueError(f"{key}={value!r}: not a number") from None
             if not number == number or number < 0 or (key in SHARES and number >= 1) or number > 1e6:
                 raise ValueError(f"{key}={value!r}: " + ("a share in [0, 1)" if key in SHARES else "a number in [0, 1e6]"))
+            if key == "rate" and number == 0:
+                raise ValueError("rate=0: a cap in bits per second above 0 (leave rate out for a link with no cap)")
             if key == "burst" and 0 < number < 1:
                 raise ValueError(f"burst={value!r}: a mean run of losses is 1 datagram or more (0: none)")
             values[key] = number

@@ -26,6 +26,7 @@ LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT, "INFO": Verdict.IM
 STATE_CACHE = 1024  # request values whose reply states are kept resolved
 OPEN_LIMIT = 1024  # requests of one exchange followed at once (beyond, the oldest is left unjudged: a flood of
 # requests, or a log whose logging system falls silent while others ask on, leaving its clock standing)
+LOSS_GAP = 0.1  # s between two times the frames do not tell all of, below which they are one time
 
 
 @dataclass
@@ -52,6 +53,10 @@ class _Open:
     open_end: str | None = None  # the ambiguity id when its last state is one the seeds leave open
     orphans: list = field(default_factory=list)  # replies to its requester that echoed another value
     unsure: bool = False  # its first reply may have come after its bound (a log's clocks tell no closer)
+    copies: list = field(default_factory=list)  # the frame numbers of the request's copies (it arrived again)
+    undelivered: str | None = None  # why its addressee never got it (a relay did not deliver it): nothing answers it
+    expired: bool = False  # its bound passed unanswered: a reply echoing it is late (judged then), not another's
+    restarts: int = 0  # copies whose replies began a sequence of states afresh
 
 
 class PassiveExchanges:
@@ -77,7 +82,7 @@ class PassiveExchanges:
         self.pairs: set[tuple] = set()  # (rule, requester, node) of every request seen
         self.senders: dict = {}  # system id -> the address and port its frames come from
         self.next_deadline = float("inf")
-        self.losses: list[tuple] = []  # (from, to, why, requesters or None): times the frames do not tell all of
+        self.losses: list[list] = []  # [from, to, why, requesters or None]: times the frames do not tell all of
 
     @property
     def messages(self) -> set[str]:
@@ -114,11 +119,42 @@ class PassiveExchanges:
         (a log's other traffic) decides what is due before anything later can split it."""
         return self._expire(now) if now > self.next_deadline else []
 
-    def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> None:
+    def lost(self, start: float, end: float, why: str = "datagrams were lost meanwhile", requesters=None) -> list:
         """Between ``start`` and ``end`` the frames do not tell all (``why``: a watcher's receive buffer overflowed,
-        a log's clock jumped, a relay dropped a datagram): a request left unanswered across that time is not judged
-        (``requesters``: only the requests of these systems; None: every request)."""
-        self.losses.append((start, end, why, requesters))
+        a log's clock jumped, a relay dropped or held a datagram): an absence across that time (a request left
+        unanswered, a sequence left unended) is not judged; an answer that came is (``requesters``: only the requests
+        of these systems; None: every request). A time overlapping the last one given for the same requesters, or
+        within LOSS_GAP of it, extends it, so that a flood of losses takes no more room than one. The time's entry, whose end (index 1) a
+        caller may move once it knows it (``end`` infinite until then)."""
+        if self.losses and end != float("inf"):
+            last = self.losses[-1]
+            if last[3] == requesters and last[1] != float("inf") and start <= last[1] + LOSS_GAP and end >= last[0]:
+                last[0], last[1] = min(last[0], start), max(last[1], end)
+                return last
+        self.losses.append([start, end, why, requesters])
+        return self.losses[-1]
+
+    def withdraw(self, number: int, why: str) -> None:
+        """The request seen as frame ``number`` never reached its addressee (``why``: a relay did not deliver it): no
+        reply answers it (a reply to a later request like it is that request's), and its absence is not judged."""
+        for queue in self.open.values():
+            for o in queue:
+                if o.request.number == number:
+                    o.undelivered = why
+                    return
+
+    def again(self, w: Watched) -> None:
+        """``w`` is a copy of a request seen before (the network, or a relay, delivered it twice): its addressee may
+        answer each copy, so a second sequence of replies is no status after the terminal one, and what the seeds
+        leave open about the request is not read (INCONCLUSIVE)."""
+        for rule in self.by_request.get(w.message, ()):
+            if not _matches(w.fields, rule.when):
+                continue
+            key = tuple(hashable(w.fields.get(e["request_field"])) for e in rule.echoes)
+            for o in reversed(self.keyed.get((id(rule), key), ())):
+                if o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields):
+                    o.copies.append(w.number)
+                    return
 
     def split(self, why: str) -> tuple[list[Finding], int]:
         """The frames' clock jumped (``why``): no bound can be timed across the jump, so every exchange still open is
@@ -156,7 +192,7 @@ class PassiveExchanges:
             elif not o.answered:
                 out.append(self._finding(o, "answered", Verdict.INCONCLUSIVE, o.rule.exchange["clause"],
                                          f"the capture ends {end - o.request.time:.3f} s after the request, before "
-                                         f"its bound of {o.rule.within:g} s", o.request))
+                                         f"its bound of {_bound(o)}", o.request))
         return out
 
     # ------------------------------------------------------------ requests
@@ -165,8 +201,8 @@ class PassiveExchanges:
         """Follow a request; the findings on one left unjudged to make room for it (OPEN_LIMIT)."""
         key = tuple(hashable(w.fields.get(e["request_field"])) for e in rule.echoes)
         same_key = self.keyed.setdefault((id(rule), key), [])
-        if any(not o.answered and o.request.src == w.src and o.request.dst == w.dst and same(o.request.fields, w.fields)
-               for o in same_key):
+        if any(not o.answered and o.undelivered is None and o.request.src == w.src and o.request.dst == w.dst
+               and same(o.request.fields, w.fields) for o in same_key):
             return []  # a resend of an open request is the same exchange
         out, queue = [], self.open[id(rule)]
         if len(queue) >= OPEN_LIMIT:
@@ -175,7 +211,9 @@ class PassiveExchanges:
                 self.keyed[(id(rule), gone.key)].remove(gone)
             out = self._unjudged(gone, f"{OPEN_LIMIT:,} later requests of its exchange were open at once (not "
                                        "followed further)")
-        o = _Open(rule, w, key, _latest(w) + rule.within, states=self._states(rule, w.fields) if rule.stateful else None)
+        # a relay's requester could not see the time the relay added to the request's trip and its reply's
+        deadline = _latest(w) + rule.within + getattr(w.where, "added", 0.0)
+        o = _Open(rule, w, key, deadline, states=self._states(rule, w.fields) if rule.stateful else None)
         self.pairs.add((id(rule), w.src, w.dst))
         same_key.append(o)
         if queue and queue[-1].deadline > o.deadline:  # a request timed by a bracket may end before an earlier one
@@ -196,9 +234,12 @@ class PassiveExchanges:
             mine = (o for o in self.open[id(rule)] if o.request.src == w.dst or w.dst == self.anyone)
         o = self._answered_by(mine, w)
         if o is None:
+            if rule.echoes and any(p.expired and p.request.src == w.dst and self._from_node(p, w) for p in mine):
+                return []  # a late reply to a request judged when its bound passed
             if rule.echoes:
                 for other in self.open[id(rule)]:
-                    if not other.answered and other.request.src == w.dst and self._from_node(other, w):
+                    if not other.answered and other.undelivered is None and other.request.src == w.dst \
+                            and self._from_node(other, w):
                         other.orphans.append(w)
             return None
         ex, out = rule.exchange, []
@@ -222,6 +263,9 @@ class PassiveExchanges:
         states = o.states
         value = w.fields.get(states.field)
         out = []
+        if o.terminal is not None and len(o.copies) > o.restarts:  # the copy's own replies begin
+            o.restarts += 1
+            o.terminal = o.open_end = None
         if o.terminal is not None:
             if o.open_end is None:
                 return [self._finding(o, "after-terminal", LEVELS[states.level], states.clause,
@@ -257,6 +301,8 @@ class PassiveExchanges:
         open_other = latest_mine = latest_other = None
         anyone, sender = self.anyone, w.src
         for o in mine:  # oldest first
+            if o.undelivered is not None or o.expired:
+                continue
             node = o.request.dst
             if (sender == o.request.src) if node in (None, anyone, self.nobody) else (sender != node):
                 continue  # not from the system the request was for (see _from_node)
@@ -292,20 +338,36 @@ class PassiveExchanges:
         return out
 
     def _judge_expired(self, o: _Open) -> list[Finding]:
+        """A request's findings once its bound has passed. Only an absence (no reply, no terminal state) is excused
+        by what the frames do not tell; a reply that came echoing another value is judged whatever was lost around
+        it. What the seeds leave open about an answered request that arrived twice is not read: the second answer may
+        be the copy's."""
         findings = self._expired(o)
-        why = "its first reply may have come after the bound (the log's clocks tell no closer)" if o.unsure else next(
-            (why for start, end, why, systems in self.losses if start <= o.deadline and end >= o.request.time
-             and (systems is None or o.request.src in systems)), None)
+        absent = (not o.answered and not (o.orphans and o.rule.echoes)) or (o.states is not None and o.terminal is None)
+        if o.unsure:
+            why = "its first reply may have come after the bound (the log's clocks tell no closer)"
+        elif absent:
+            why = o.undelivered or next((why for start, end, why, systems in self.losses if start <= o.deadline and
+                                         end >= o.request.time and (systems is None or o.request.src in systems)), None)
+        else:
+            why = None
+        if why is None and o.copies and o.answered:  # a copy adds answers; it never takes one away
+            why = f"the request arrived {len(o.copies) + 1} times (frames {o.request.number}, " \
+                  f"{', '.join(map(str, o.copies))}): its addressee may have answered each copy"
+            excused = (Verdict.NON_STRICT, Verdict.IMPL_DEFINED)
+        else:
+            excused = (Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED)
         if why is not None:
-            for f in findings:  # the reply, or the right one, may have been lost
-                if f.verdict in (Verdict.FAIL, Verdict.NON_STRICT):
+            for f in findings:  # the reply, or the right one, may have been lost; a reading rests on no absence seen
+                if f.verdict in excused:
                     f.verdict, f.detail = Verdict.INCONCLUSIVE, f"{f.detail}; not judged: {why}"
         return findings
 
     def _expired(self, o: _Open) -> list[Finding]:
-        ex, bound = o.rule.exchange, o.rule.within
+        ex, bound = o.rule.exchange, _bound(o)
         if not o.answered:
-            self.keyed[(id(o.rule), o.key)].remove(o)
+            o.expired = True  # kept one more bound, so that a late reply is known for its own
+            self.ended[id(o.rule)].append(o)
             if o.orphans and o.rule.echoes:
                 w = o.orphans[0]
                 e = next((e for e in o.rule.echoes if not same(w.fields.get(e["reply_field"]),
@@ -314,16 +376,16 @@ class PassiveExchanges:
                 asked = self._name(o.request.message, e["request_field"], o.request.fields.get(e["request_field"]))
                 echoed = self._name(w.message, e["reply_field"], w.fields.get(e["reply_field"]))
                 return [self._finding(o, f"echo-{e['request_field']}", LEVELS[e["level"]], e["clause"],
-                                      f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound:g} s; "
+                                      f"no {ex['reply']} echoed {e['request_field']}={asked} within {bound}; "
                                       f"this one carries {e['reply_field']}={echoed}", w)]
             silent = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence)
             if silent is not None:  # the seeds require no reply to this request: a reading, never a failure
-                return [self._reading(o, silent, f"no {ex['reply']} {self._between(o)} within {bound:g} s")]
+                return [self._reading(o, silent, f"no {ex['reply']} {self._between(o)} within {bound}")]
             return [self._finding(o, "answered", LEVELS[ex["level"]], ex["clause"],
-                                  f"no {ex['reply']} {self._between(o)} within {bound:g} s", o.request)]
+                                  f"no {ex['reply']} {self._between(o)} within {bound}", o.request)]
         self.ended[id(o.rule)].append(o)
         if o.states is not None and o.terminal is None:
-            what = f"no terminal {ex['reply']} within {bound:g} s"
+            what = f"no terminal {ex['reply']} within {bound}"
             unended = silence_allowed(self.wire, ex, o.request.fields, self.edition, self._facts(o), self.silence,
                                       unended=True)
             if unended is not None:  # a later request reusing its identifier may have replaced it
@@ -346,7 +408,7 @@ class PassiveExchanges:
         if not any("reuses" in r or "reused" in r for r in ex.get("silence", ())):
             return facts
         rid, mine = id(o.rule), o.request
-        others = [p for p in (*self.open[rid], *self.ended[rid]) if p is not o
+        others = [p for p in (*self.open[rid], *self.ended[rid]) if p is not o and not p.expired
                   and p.request.src == mine.src and p.request.dst == mine.dst]
         for fact, chosen in (("reuses", [p for p in others if p.request.number < mine.number]),
                              ("reused", [p for p in others if p.request.number > mine.number and p.answered])):
@@ -365,13 +427,13 @@ class PassiveExchanges:
     def _late(self, o: _Open, w: Watched) -> str:
         """Why ``w``, which came before the request's bound surely passed, may yet have come after it (its time and
         the request's known only within brackets: frames of a log stamped by other clocks); "" if surely within."""
-        within = o.rule.within
-        if _latest(w) - o.request.time <= within:
+        allowed = o.deadline - _latest(o.request)  # the bound, and the time a relay added to the way
+        if _latest(w) - o.request.time <= allowed:
             return ""
         early, late = max(0.0, w.time - _latest(o.request)), _latest(w) - o.request.time
         at_most = f"to {late:.3f} s" if late < float("inf") else "s or more (the request came before the log's " \
             "clock began)"
-        return (f"came {early:.3f} {at_most} after the request (bound {within:g} s): the log's clocks tell no closer, "
+        return (f"came {early:.3f} {at_most} after the request (bound {_bound(o)}): the log's clocks tell no closer, "
                 "not judged")
 
     # ------------------------------------------------------------ shared
@@ -380,7 +442,7 @@ class PassiveExchanges:
         if detail and w is not o.request:
             detail = f"request frame {o.request.number}: {detail}"
         return Finding(o.request.message, f"exchange/{o.rule.exchange['id']}/{aspect}", verdict, clause, detail,
-                       w.number, w.time, None, w.where)
+                       w.number, w.time, None, w.where, asker=o.request.where)
 
     def _between(self, o: _Open) -> str:
         """Who owed whom the reply: ``from system 30 to 19696``."""
@@ -413,6 +475,12 @@ def _deadline(o: _Open) -> float:
 def _latest(w: Watched) -> float:
     """The latest time ``w`` can have been seen at."""
     return w.time if w.latest is None else w.latest
+
+
+def _bound(o: _Open) -> str:
+    """A request's bound in words: ``5 s``, or ``5 s (and the 4 s a relay added to the way)``."""
+    added = o.deadline - _latest(o.request) - o.rule.within
+    return f"{o.rule.within:g} s" + (f" (and the {added:.3g} s a relay added to the way)" if added > 1e-9 else "")
 
 
 def _matches(fields: dict, when: dict[str, frozenset]) -> bool:

@@ -1,10 +1,12 @@
 """What the relay needs of IMC, sans-IO: a node sends to the address a peer's Announce names (``imc+udp://IP:PORT/``,
 imc-wire.md "IMC over UDP"), not to where the datagram came from, so the relay changes the addresses an Announce
-announces to its own (the one the other side talks to): replies then come back through it. Nothing else is changed.
+announces to its own (the one the other side talks to): replies then come back through it, and the relay sends the
+other side's datagrams to the address the Announce named (a node may send from any port). Nothing else is changed.
 And the ambiguity under which a requester's resending of a lost query is recorded."""
 
 from __future__ import annotations
 
+import ipaddress
 import re
 
 from . import codec
@@ -21,17 +23,38 @@ class AnnounceRewriter:
         self.defs = defs
         self.announce = defs.by_abbrev["Announce"].id
 
-    def __call__(self, data: bytes, facing: tuple) -> bytes | None:
-        """The datagram with its Announce's imc+udp services naming ``facing`` (host, port); None when it is no
-        Announce, names no such service, or does not decode (it is then carried unchanged, and judged as it is)."""
+    def _services(self, data: bytes) -> tuple[dict, str, str] | None:
+        """An Announce's message, byte order and services; None for any other datagram, or one that does not decode."""
         order = codec.byte_order_of(data)
         if order is None or len(data) < 4 or int.from_bytes(data[2:4], "little" if order == "le" else "big") != self.announce:
             return None
         try:
             message = codec.decode(self.defs, data)
-            services = text_bytes(message["fields"].get("services", "")).decode("utf-8", "replace")
+            return message, order, text_bytes(message["fields"].get("services", "")).decode("utf-8", "replace")
         except ValueError:
             return None
+
+    def reply_to(self, data: bytes) -> tuple[str, int] | None:
+        """Where an Announce asks to be sent to: its first imc+udp service on loopback (host, port); else None (a
+        node that announces no such service is answered where its datagrams come from)."""
+        found = self._services(data)
+        for match in UDP_SERVICE.finditer(found[2] if found else ""):
+            host, port = match.group(1).strip("[]"), int(match.group(0).rstrip("/").rsplit(":", 1)[1])
+            try:
+                loopback = ipaddress.ip_address(host).is_loopback
+            except ValueError:
+                loopback = False
+            if loopback and 0 < port < 65536:
+                return host, port
+        return None
+
+    def __call__(self, data: bytes, facing: tuple) -> bytes | None:
+        """The datagram with its Announce's imc+udp services naming ``facing`` (host, port); None when it is no
+        Announce, names no such service, or does not decode (it is then carried unchanged, and judged as it is)."""
+        found = self._services(data)
+        if found is None:
+            return None
+        message, order, services = found
         host = f"[{facing[0]}]" if ":" in facing[0] else facing[0]
         changed = UDP_SERVICE.sub(f"imc+udp://{host}:{facing[1]}/", services)
         if changed == services:

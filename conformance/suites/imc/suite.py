@@ -194,7 +194,8 @@ class ImcSuite(DataSuite):
 
     def relay_hooks(self) -> dict:
         from .relay import INTRODUCTIONS, RESEND, AnnounceRewriter
-        return {"rewrite": AnnounceRewriter(self.defs), "resend": RESEND, "introductions": INTRODUCTIONS}
+        rewriter = AnnounceRewriter(self.defs)
+        return {"rewrite": rewriter, "reply_to": rewriter.reply_to, "resend": RESEND, "introductions": INTRODUCTIONS}
 
     def log_reader(self, edition: str | None = None):
         from .lsf import LsfReader

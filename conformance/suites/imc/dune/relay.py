@@ -20,9 +20,10 @@ from pathlib import Path
 
 from .build import home, source
 from .conformance import entered
-from .world import CONFIG_DIR, UDP_MESSAGES, dune_argv, forget_state, start, stop
+from .world import CONFIG_DIR, MODEM, SHARED, UDP_MESSAGES, dune_argv, forget_state, start, stop
 
 VEHICLE, CONSOLE = "lauv-xplore-3", "lauv-xplore-2"
+VEHICLE_ID = "0x0020"  # lauv-xplore-3 in DUNE's etc/common/imc-addresses.ini
 VEHICLE_PORT, CONSOLE_PORT, LISTEN, VIA = 6002, 6003, 6010, 6011
 STARTUP = 5.0  # seconds DUNE takes to start its transports before the relay listens
 
@@ -38,7 +39,7 @@ VEHICLE_INI = """\
 # Written by imc-conformance (make dune-relay): DUNE's lauv-simulator-1 configuration as the vehicle, its UDP transport
 # sending only to the relay, announcing nothing.
 [Require ../lauv-simulator-1.ini]
-
+{shared}
 [General]
 Vehicle = {name}
 {quiet}
@@ -48,7 +49,7 @@ Static Destinations = 127.0.0.1:{to}
 Ignore Filter = true
 Local Messages Only = true
 {transports}
-
+{modem}
 [Simulators.Iridium]
 Enabled = Never
 
@@ -88,9 +89,9 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--impair", default="loss=0.3,delay=2", help="the impaired link (default loss=0.3,delay=2)")
     parser.add_argument("--seed", type=int, default=1, help="the impairment's seed (default 1)")
     parser.add_argument("--reports", type=Path, default=Path("reports"), help="where to write the reports")
-    parser.add_argument("--console", choices=("dune", "session", "both"), default="both",
+    parser.add_argument("--console", choices=("dune", "session", "imcpy", "both", "all"), default="all",
                         help="the console: a second DUNE, the suite's own session (its HistoricDataQuery scenarios), "
-                             "or both in turn (default)")
+                             "an imcpy actor (imcpy_console.py), the first two in turn (both), or all three (default)")
     args = parser.parse_args(argv)
     done = entered(argv, "relay", "make dune-relay")
     if done is not None:
@@ -98,10 +99,11 @@ def main(argv: list[str]) -> int:
     args.reports.mkdir(parents=True, exist_ok=True)
     codes = {}
     try:
-        for session in {"dune": (False,), "session": (True,), "both": (False, True)}[args.console]:
+        for console in {"both": ("dune", "session"), "all": ("dune", "session", "imcpy")}.get(args.console,
+                                                                                              (args.console,)):
             for name, spec in (("clean", ""), ("impaired", args.impair)):
-                name = f"session-{name}" if session else name
-                codes[name] = _pair(args, name, spec, session)
+                name = name if console == "dune" else f"{console}-{name}"
+                codes[name] = _pair(args, name, spec, console)
     except KeyboardInterrupt:
         print("make dune-relay: interrupted", file=sys.stderr)
         return 130
@@ -115,10 +117,11 @@ def main(argv: list[str]) -> int:
     return 0 if all(code in (0, 1) for code in codes.values()) else 2
 
 
-def _pair(args, name: str, spec: str, session: bool = False) -> int:
+def _pair(args, name: str, spec: str, console: str = "dune") -> int:
     """The DUNEs started afresh, relayed for ``--seconds`` over the link ``spec``, stopped; the relay's exit code.
-    ``session``: the suite's own session is the console (the HistoricDataQuery scenarios, which DUNE's DataStore
-    answers), not a second DUNE; the vehicle then sends the replies the scenarios wait for."""
+    ``console``: a second DUNE, the suite's own session (the HistoricDataQuery scenarios, which DUNE's DataStore
+    answers) or an imcpy actor (``imcpy_console.py``); with the last two, the vehicle sends the replies they wait
+    for."""
     import subprocess
 
     from ....cli import main as cli
@@ -128,9 +131,15 @@ def _pair(args, name: str, spec: str, session: bool = False) -> int:
     folder = source() / "etc" / CONFIG_DIR
     folder.mkdir(parents=True, exist_ok=True)
     disabled = "".join(f"\n[{task}]\nEnabled = Never\n" for task in CONSOLE_WITHOUT)
+    session = console != "dune"
     transports = f"Transports = {', '.join(UDP_MESSAGES)}" if session else ""
+    acoustic = console == "imcpy"  # the acoustic modem simulator, so that AcousticSystemsQuery is served too
+    if acoustic:
+        (folder / "shared.ini").write_text(SHARED)
     (folder / "relay-vehicle.ini").write_text(VEHICLE_INI.format(name=VEHICLE, quiet=NOT_ANNOUNCED, port=VEHICLE_PORT,
-                                                                 to=VIA, transports=transports))
+                                                                 to=VIA, transports=transports,
+                                                                 shared="[Require shared.ini]\n" if acoustic else "",
+                                                                 modem=MODEM.format(seed=1) if acoustic else ""))
     (folder / "relay-console.ini").write_text(CONSOLE_INI.format(name=CONSOLE, quiet=NOT_ANNOUNCED, disabled=disabled,
                                                                  port=CONSOLE_PORT, to=LISTEN))
     processes = ("vehicle",) if session else ("vehicle", "console")
@@ -149,8 +158,13 @@ def _pair(args, name: str, spec: str, session: bool = False) -> int:
         relaying = subprocess.Popen([str(Path(sys.executable).parent / "imc-conformance"), *relay, "--duration", "1800"])
         try:
             time.sleep(2.0)
-            cli(["run", "--no-progress", "--target", f"udp://127.0.0.1:{LISTEN}", "--startup", "40", "--message",
-                 "HistoricDataQuery", "--json", f"{out}-console.json"])
+            if console == "imcpy":
+                subprocess.run([sys.executable, "-m", "imc_conformance.suites.imc.dune.imcpy_console", "--relay",
+                                str(LISTEN), "--vehicle", VEHICLE_ID, "--name", VEHICLE, "--seconds", str(args.seconds),
+                                "--json", f"{out}-console.json"], timeout=args.seconds + 60)
+            else:
+                cli(["run", "--no-progress", "--target", f"udp://127.0.0.1:{LISTEN}", "--startup", "40", "--message",
+                     "HistoricDataQuery", "--json", f"{out}-console.json"])
         finally:
             relaying.send_signal(signal.SIGTERM)
             code = relaying.wait(120)
