@@ -35,7 +35,8 @@ class Evidence:
 
     def __init__(self, suite, cases: list[Case], edition: str):
         self.suite, self.edition = suite, edition
-        self.weighs = {name: kind for name, kind in suite.kinds.items() if hasattr(kind, "evidence")}
+        made = {name: suite.kinds[name] for name in {c.kind for c in cases}}  # only the kinds the run plans are made
+        self.weighs = {name: kind for name, kind in made.items() if hasattr(kind, "evidence")}
         self.cases = {c.id: c for c in cases if c.kind in self.weighs}
         self.shown: set[tuple[str, str]] = set()  # (group, capability)
         self.needs: list[tuple[Case, CheckResult, str]] = []  # a refusal judged, and the capability it rests on

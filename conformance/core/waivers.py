@@ -223,11 +223,12 @@ def cause_waivers_document(result, reason: str, data: dict[str, dict]) -> tuple[
     causes = group_causes(plain, lambda c: cause_of(c, data.get(c.id)), errata=False)
     grouped = {cid for c in causes for cid in c.cases}
     reasons = {c.id: c.waiver for c in cases}
+    titles = {c.key: c.title for c in result.cause_groups()}  # as the run's reports name them (what the cases share)
     out = []
     for cause in causes:
         given = {reasons[cid] for cid in cause.cases}
         out.append({"cause": cause.key, "reason": given.pop() if len(given) == 1 and None not in given else
-                    f"{cause.title} ({cause.summary}); {reason}"})
+                    f"{titles.get(cause.key, cause.title)} ({cause.summary}); {reason}"})
     by_id: dict[str, str] = {}
     for case in plain:
         if case.id not in grouped:
