@@ -75,14 +75,19 @@ def command(args) -> int:
     return 0
 
 
-def either(outcome) -> None:
-    """Encode probes whose frame holds another value than the request gave: both readings, and how to tell them."""
+def _notes(lines: list[str]) -> None:
+    """The first SHOWN notes, and how many more there are."""
     from ..escaping import printable
 
-    for line in outcome.either[:SHOWN]:
+    for line in lines[:SHOWN]:
         print(f"  note  {printable(line)[:400]}")
-    if len(outcome.either) > SHOWN:
-        print(f"        … and {len(outcome.either) - SHOWN} more like these")
+    if len(lines) > SHOWN:
+        print(f"        … and {len(lines) - SHOWN} more like these")
+
+
+def either(outcome) -> None:
+    """Encode probes whose frame holds another value than the request gave: both readings, and how to tell them."""
+    _notes(outcome.either)
     print("        either the implementation writes these values so (e.g. it canonicalises a NaN's bits when it writes "
           "a float): its own result, which a run judges (a FAIL of those encode checks, not the adapter's)")
     print("        or the adapter changed the value before handing it over (a \"nan:<hex>\" read as a plain NaN, an "
@@ -93,14 +98,10 @@ def either(outcome) -> None:
           "value parser alone (the starters' --values reads value probes and answers them without the "
           "implementation): if the value is right when handed over, the frame is the implementation's")
 
+
 def rule_readings(outcome) -> None:
     """Refusals naming a rule the input does not break, each for one kind of input: both readings, and how to tell."""
-    from ..escaping import printable
-
-    for line in outcome.rules[:SHOWN]:
-        print(f"  note  {printable(line)[:400]}")
-    if len(outcome.rules) > SHOWN:
-        print(f"        … and {len(outcome.rules) - SHOWN} more like these")
+    _notes(outcome.rules)
     print("        either the implementation's own check refused it under that rule (e.g. its transport takes the CRC "
           "from the datagram's last two bytes, not from the frame's footer): its own result, which a run judges "
           "NON_STRICT (the adapter reports it faithfully: keep naming the rule)")
