@@ -94,6 +94,7 @@ CAUGHT = {
     "dies-on-compressed-history": ("imc/HistoricDataQuery/scenario/compressed-history", "FAIL"),
     "repeat-range-drops-both": ("imc/AcousticOperation/scenario/two-ranges-one-system", "FAIL"),
     "lists-other-names": ("imc/AcousticOperation/scenario/range-listed-system", "NON_STRICT"),
+    "beats-only-when-answered": ("imc/Heartbeat/scenario/heartbeat-answered", "NON_STRICT"),
 }
 
 
@@ -118,6 +119,7 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "repeat-range-replaces": {"two-requests-one-system"},  # one terminal for two RANGEs to one system
     "loses-first-copy": set(),  # every idempotent request answered on its resend
     "forwards-on-period": set(),  # kept commands forwarded every 30 s, as DUNE, never an expired one
+    "answers-heartbeats": {"heartbeat-reply"},  # its answer, addressed to the session, recorded
 }
 
 

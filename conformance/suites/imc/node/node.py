@@ -168,7 +168,7 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
             del self.contacts[src], self.heard_at[src]
         if self.next_beat is not None and self.next_beat <= t:
             self.next_beat = t + 1.0
-            if self.broken != "no-heartbeat":
+            if self.broken not in ("no-heartbeat", "beats-only-when-answered"):
                 out += [(addr, self._frame(t, "Heartbeat", {}, dst=UNKNOWN_SYSTEM, ent=0)) for addr in self.contacts.values()]
         if self.next_announce is not None and self.next_announce <= t:
             self.next_announce = t + (60.0 if self.variant == "slow-announce" else 10.0)
@@ -238,6 +238,11 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
         return self._frame(t, "Announce", fields, dst=0, ent=0, dst_ent=0)
 
     # ------------------------------------------------------------------ requests
+
+    def _on_Heartbeat(self, t: float, message: dict) -> None:
+        """A peer's Heartbeat: the reference node answers none (as DUNE); some nodes send one back to that peer."""
+        if self.variant == "answers-heartbeats" or self.broken == "beats-only-when-answered":
+            self._reply(t, PROCESSING, message, "Heartbeat", {})
 
     def _on_SystemGroup(self, t: float, message: dict) -> None:
         """Set and Chg store a group's list of systems, Dis forgets it, Req is answered with a Rep."""
