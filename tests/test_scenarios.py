@@ -95,6 +95,7 @@ CAUGHT = {
     "repeat-range-drops-both": ("imc/AcousticOperation/scenario/two-ranges-one-system", "FAIL"),
     "lists-other-names": ("imc/AcousticOperation/scenario/range-listed-system", "NON_STRICT"),
     "beats-only-when-answered": ("imc/Heartbeat/scenario/heartbeat-answered", "NON_STRICT"),
+    "keeps-disbanded-group": ("imc/SystemGroup/scenario/disband-then-request", "NON_STRICT"),
 }
 
 
@@ -120,6 +121,7 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "loses-first-copy": set(),  # every idempotent request answered on its resend
     "forwards-on-period": set(),  # kept commands forwarded every 30 s, as DUNE, never an expired one
     "answers-heartbeats": {"heartbeat-reply"},  # its answer, addressed to the session, recorded
+    "silent-on-unknown-group": {"disbanded-group-request"},  # its silence for a disbanded group, recorded
 }
 
 
@@ -632,3 +634,23 @@ def test_a_node_forwarding_on_dunes_period_is_caught_only_if_it_forwards_an_expi
     assert {c.id: c.verdict.value for c in plain.cases if c.verdict is not Verdict.PASS} == {}
     both, _ = run_virtual(suite, chosen, variant="forwards-on-period", broken="forwards-expired-stored")
     assert verdicts(both)[case_id] == "FAIL"
+
+
+def test_silence_is_a_reading_only_for_a_request_about_the_group_disbanded(suite, cases):
+    """A SystemGroup Req for a group a Dis of the same requester disbanded may go unanswered (reading
+    disbanded-group-request), live and in the passive view of its frames; a Req for a group nobody disbanded (the Dis
+    named another) that goes unanswered stays a SHOULD not met."""
+    import copy
+    from dataclasses import replace
+
+    case = next(c for c in cases if c.id == "imc/SystemGroup/scenario/disband-then-request")
+    result, _ = run_virtual(suite, [case], variant="silent-on-unknown-group")
+    assert verdicts(result)[case.id] == "IMPL_DEFINED"
+    assert not [c.id for c in result.cases if c.verdict in (Verdict.FAIL, Verdict.NON_STRICT)]
+    data = copy.deepcopy(case.data)
+    for step in data["steps"]:
+        if "send" in step and step["id"] != "request":
+            step["send"]["fields"]["GroupName"] = "imc-conformance-other-group"
+    other, _ = run_virtual(suite, [replace(case, data=data)], variant="silent-on-unknown-group")
+    found = next(c for c in other.cases if c.id == case.id)
+    assert found.verdict is Verdict.NON_STRICT and "no SystemGroup" in found.detail

@@ -253,9 +253,10 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
             self.groups[name] = f["GroupList"]
             while len(self.groups) > MAX_CONTACTS:
                 del self.groups[next(iter(self.groups))]
-        elif action == "Dis":
+        elif action == "Dis" and self.broken != "keeps-disbanded-group":
             self.groups.pop(name, None)
-        elif action == "Req" and self.broken != "no-group-report":
+        elif action == "Req" and self.broken != "no-group-report" and (
+                name in self.groups or self.variant != "silent-on-unknown-group"):
             self._reply(t, PROCESSING, message, "SystemGroup", {"GroupName": f["GroupName"],
                                                                 "Action": self._v("SystemGroup", "Action", "Rep"),
                                                                 "GroupList": self.groups.get(name, "")})
