@@ -122,6 +122,9 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "forwards-on-period": set(),  # kept commands forwarded every 30 s, as DUNE, never an expired one
     "answers-heartbeats": {"heartbeat-reply"},  # its answer, addressed to the session, recorded
     "silent-on-unknown-group": {"disbanded-group-request"},  # its silence for a disbanded group, recorded
+    # the copy's reply not given, recorded; two RANGEs to one system sent together are byte for byte the same, so it
+    # takes the second for the link's copy: one terminal state for the two
+    "answers-a-copy-once": {"duplicated-request", "two-requests-one-system"},
 }
 
 
@@ -654,3 +657,21 @@ def test_silence_is_a_reading_only_for_a_request_about_the_group_disbanded(suite
     other, _ = run_virtual(suite, [replace(case, data=data)], variant="silent-on-unknown-group")
     found = next(c for c in other.cases if c.id == case.id)
     assert found.verdict is Verdict.NON_STRICT and "no SystemGroup" in found.detail
+
+
+DUPLICATED = ("imc/AcousticSystemsQuery/scenario/duplicated-query", "imc/LblConfig/scenario/duplicated-get",
+              "imc/SystemGroup/scenario/duplicated-request")
+
+
+def test_a_duplicated_request_answered_once_or_twice_is_a_reading_and_a_third_reply_is_flagged(suite, cases):
+    """A query the link duplicated: the reference node answers each copy, answers-a-copy-once only the first; each
+    shows the reading duplicated-request and neither fails. A node that answers every query twice (four replies to
+    the two copies) is flagged by the step that allows one more reply, not more (SHOULD)."""
+    chosen = [c for c in cases if c.id in DUPLICATED]
+    for variant, said in ((None, "answered too (a second reply): yes"), ("answers-a-copy-once", "no ")):
+        result, _ = run_virtual(suite, chosen, variant=variant)
+        for case in (c for c in result.cases if c.id in DUPLICATED):
+            reading = next(k for k in case.checks if k.check == "step:copy-reply:reading-duplicated-request")
+            assert case.verdict is Verdict.IMPL_DEFINED and said in reading.detail, (variant, case.id, reading.detail)
+    twice, _ = run_virtual(suite, chosen, broken="two-replies")
+    assert verdicts(twice)["imc/AcousticSystemsQuery/scenario/duplicated-query"] == "NON_STRICT"

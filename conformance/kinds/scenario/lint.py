@@ -201,8 +201,9 @@ def _silent_cover_problem(case, step, ref, sends, exchange, wire, edition, behav
               and any(same(e.get(r["request_field"]), fields.get(r["request_field"])) for e in earlier)}
     kind = [sends[s]["fields"] for s in sends if order.index(s) < order.index(ref)
             and sends[s]["abbrev"] == sends[ref]["abbrev"]]
+    answered = any(s.get("reply_to") == ref and order.index(s["id"]) < order.index(step["id"]) for s in case["steps"])
     facts = {"nobody": nobody, "reuses": reuses, "to": "elsewhere" if spec.get("to") not in (None, "node") else None,
-             "earlier": kind}
+             "earlier": kind, "copied": spec.get("copies", 1) > 1 and answered}
     ambiguity = silence_allowed(wire, exchange, fields, edition, facts, behaviour.get("silence", ()))
     if ambiguity is None:
         return None

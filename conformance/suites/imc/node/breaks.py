@@ -106,5 +106,6 @@ VARIANTS = {
     "forwards-on-period": "kept RemoteCommands are forwarded to their recipients on the link only every 30 s (as DUNE's Wi-Fi forwarding), not as they come or as a recipient appears; never an expired one",
     "answers-heartbeats": "a Heartbeat addressed to it is answered with one addressed to its sender, besides its own every second to anyone",
     "silent-on-unknown-group": "a SystemGroup Req for a group it does not hold (disbanded, or never Set) goes unanswered",
+    "answers-a-copy-once": "a datagram byte for byte the one it took less than 1 s before is dropped as the link's copy: a duplicated request is answered once",
     "repeat-range-replaces": "a RANGE AcousticOperation to a system a RANGE is under way to replaces it: nothing more is said of the first, the second is carried out",
 }
