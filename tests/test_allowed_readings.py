@@ -110,3 +110,24 @@ def test_a_state_outside_a_table_stays_a_reading_though_its_entry_is_a_should(su
     assert suite.behaviour["ambiguities"]["states-without-a-table"]["level"] == "SHOULD"
     assert any(k.check.endswith(":reading-states-without-a-table") and k.verdict is Verdict.IMPL_DEFINED
                for k in case.checks)
+
+
+def test_no_report_for_a_disbanded_group_is_a_reading_live_and_in_its_recording(suite, cases, tmp_path):
+    """A node that leaves a SystemGroup Req for a group it no longer holds unanswered fails nothing, live or judged
+    again from its recording by the passive exchange rules (the Dis before it, from the same requester, selects the
+    request); each shows the reading disbanded-group-request."""
+    import json
+
+    from imc_conformance.cli import main
+
+    chosen = [c for c in cases if c.id == "imc/SystemGroup/scenario/disband-then-request"]
+    path, out = tmp_path / "run.pcapng", tmp_path / "judged.json"
+    live = recorded_run(suite, chosen, path, variant="silent-on-unknown-group")
+    case = next(c for c in live.cases if c.id == chosen[0].id)
+    assert case.verdict is Verdict.IMPL_DEFINED
+    assert any(k.check.endswith(":reading-disbanded-group-request") for k in case.checks)
+    assert main(["pcap", str(path), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    judged = {c["id"]: c["verdict"] for m in doc["messages"] for c in m["cases"]}
+    assert judged["imc/SystemGroup/capture/exchange/system-group/reading/disbanded-group-request"] == "IMPL_DEFINED"
+    assert not {k: v for k, v in judged.items() if v not in ("PASS", "IMPL_DEFINED")}

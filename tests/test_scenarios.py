@@ -94,6 +94,8 @@ CAUGHT = {
     "dies-on-compressed-history": ("imc/HistoricDataQuery/scenario/compressed-history", "FAIL"),
     "repeat-range-drops-both": ("imc/AcousticOperation/scenario/two-ranges-one-system", "FAIL"),
     "lists-other-names": ("imc/AcousticOperation/scenario/range-listed-system", "NON_STRICT"),
+    "beats-only-when-answered": ("imc/Heartbeat/scenario/heartbeat-answered", "NON_STRICT"),
+    "keeps-disbanded-group": ("imc/SystemGroup/scenario/disband-then-request", "NON_STRICT"),
 }
 
 
@@ -118,6 +120,11 @@ READINGS = {  # variant -> the open readings (ambiguities.json) it takes, each s
     "repeat-range-replaces": {"two-requests-one-system"},  # one terminal for two RANGEs to one system
     "loses-first-copy": set(),  # every idempotent request answered on its resend
     "forwards-on-period": set(),  # kept commands forwarded every 30 s, as DUNE, never an expired one
+    "answers-heartbeats": {"heartbeat-reply"},  # its answer, addressed to the session, recorded
+    "silent-on-unknown-group": {"disbanded-group-request"},  # its silence for a disbanded group, recorded
+    # the copy's reply not given, recorded; two RANGEs to one system sent together are byte for byte the same, so it
+    # takes the second for the link's copy: one terminal state for the two
+    "answers-a-copy-once": {"duplicated-request", "two-requests-one-system"},
 }
 
 
@@ -630,3 +637,41 @@ def test_a_node_forwarding_on_dunes_period_is_caught_only_if_it_forwards_an_expi
     assert {c.id: c.verdict.value for c in plain.cases if c.verdict is not Verdict.PASS} == {}
     both, _ = run_virtual(suite, chosen, variant="forwards-on-period", broken="forwards-expired-stored")
     assert verdicts(both)[case_id] == "FAIL"
+
+
+def test_silence_is_a_reading_only_for_a_request_about_the_group_disbanded(suite, cases):
+    """A SystemGroup Req for a group a Dis of the same requester disbanded may go unanswered (reading
+    disbanded-group-request), live and in the passive view of its frames; a Req for a group nobody disbanded (the Dis
+    named another) that goes unanswered stays a SHOULD not met."""
+    import copy
+    from dataclasses import replace
+
+    case = next(c for c in cases if c.id == "imc/SystemGroup/scenario/disband-then-request")
+    result, _ = run_virtual(suite, [case], variant="silent-on-unknown-group")
+    assert verdicts(result)[case.id] == "IMPL_DEFINED"
+    assert not [c.id for c in result.cases if c.verdict in (Verdict.FAIL, Verdict.NON_STRICT)]
+    data = copy.deepcopy(case.data)
+    for step in data["steps"]:
+        if "send" in step and step["id"] != "request":
+            step["send"]["fields"]["GroupName"] = "imc-conformance-other-group"
+    other, _ = run_virtual(suite, [replace(case, data=data)], variant="silent-on-unknown-group")
+    found = next(c for c in other.cases if c.id == case.id)
+    assert found.verdict is Verdict.NON_STRICT and "no SystemGroup" in found.detail
+
+
+DUPLICATED = ("imc/AcousticSystemsQuery/scenario/duplicated-query", "imc/LblConfig/scenario/duplicated-get",
+              "imc/SystemGroup/scenario/duplicated-request")
+
+
+def test_a_duplicated_request_answered_once_or_twice_is_a_reading_and_a_third_reply_is_flagged(suite, cases):
+    """A query the link duplicated: the reference node answers each copy, answers-a-copy-once only the first; each
+    shows the reading duplicated-request and neither fails. A node that answers every query twice (four replies to
+    the two copies) is flagged by the step that allows one more reply, not more (SHOULD)."""
+    chosen = [c for c in cases if c.id in DUPLICATED]
+    for variant, said in ((None, "answered too (a second reply): yes"), ("answers-a-copy-once", "no ")):
+        result, _ = run_virtual(suite, chosen, variant=variant)
+        for case in (c for c in result.cases if c.id in DUPLICATED):
+            reading = next(k for k in case.checks if k.check == "step:copy-reply:reading-duplicated-request")
+            assert case.verdict is Verdict.IMPL_DEFINED and said in reading.detail, (variant, case.id, reading.detail)
+    twice, _ = run_virtual(suite, chosen, broken="two-replies")
+    assert verdicts(twice)["imc/AcousticSystemsQuery/scenario/duplicated-query"] == "NON_STRICT"

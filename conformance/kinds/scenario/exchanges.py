@@ -31,9 +31,12 @@ def silence_allowed(wire, exchange: dict, request: dict, edition: str, facts: di
     or of ``everywhere``: the rules for every exchange), or None. A rule selects requests by their fields (``when``,
     ``null``) and by ``facts`` about them: the fields naming a system nobody answers for (``nobody``), the fields
     whose value an earlier request of the exchange still carries (``reuses``), the fields whose value a later
-    request carries that was answered (``reused``: it may have replaced this one), and where the request was addressed
-    (``to``: "elsewhere", neither the node nor anyone). ``unended``: the rules under which a request may also be
-    left without its end (its replies stop before a terminal state), those marked ``unended``."""
+    request carries that was answered (``reused``: it may have replaced this one), where the request was addressed
+    (``to``: "elsewhere", neither the node nor anyone), the fields of the earlier messages of its kind from the
+    same requester (``earlier``: a rule's ``after`` selects a request one of them, echoing its values, undid), and
+    whether it was sent in copies, one of them answered already (``copied``: a further reply is the copy's to give).
+    ``unended``: the rules under which a request may also be left without its end (its replies stop before a
+    terminal state), those marked ``unended``."""
     facts = facts or {}
     message = exchange["request"]["message"]
     for rule in (*exchange.get("silence", ()), *everywhere):
@@ -44,9 +47,18 @@ def silence_allowed(wire, exchange: dict, request: dict, edition: str, facts: di
                 and ("null" not in rule or request.get(rule["null"]) is None)
                 and ("nobody" not in rule or rule["nobody"] in facts.get("nobody", ()))
                 and ("reuses" not in rule or rule["reuses"] in facts.get("reuses", ()))
-                and ("to" not in rule or rule["to"] == facts.get("to"))):
+                and ("to" not in rule or rule["to"] == facts.get("to"))
+                and ("copied" not in rule or rule["copied"] == bool(facts.get("copied")))
+                and ("after" not in rule or any(selected(wire, message, e, rule["after"], edition)
+                                                and _echoes(exchange, e, request) for e in facts.get("earlier", ())))):
             return rule["ambiguity"]
     return None
+
+
+def _echoes(exchange: dict, earlier: dict, request: dict) -> bool:
+    """Whether an earlier message carried the request's values of every field the exchange's replies echo."""
+    fields = [r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"]
+    return bool(fields) and all(same(earlier.get(f), request.get(f)) for f in fields)
 
 
 def seconds(value, bounds: dict) -> float:

@@ -143,8 +143,10 @@ class Judging:
 
     def _facts(self, ref: str, exchange: dict) -> dict:
         """What the silence rules may select a request by, beyond its fields: the fields naming a system nobody
-        answers for (``$nobody``), the echoed fields whose value an earlier request of the exchange carried, and
-        where it was addressed ("elsewhere": neither to the node nor to anyone)."""
+        answers for (``$nobody``), the echoed fields whose value an earlier request of the exchange carried,
+        where it was addressed ("elsewhere": neither to the node nor to anyone), the fields of the earlier
+        messages of its kind sent from the same system (``earlier``), and whether it was sent in copies of which one
+        was answered already (``copied``)."""
         spec = self._spec(ref)["send"]["fields"]
         nobody = {name for name, value in spec.items() if isinstance(value, dict) and "$nobody" in value}
         sent = self.sent[ref].decoded.get("fields", {})
@@ -162,7 +164,11 @@ class Judging:
         composed = self.sent[ref]
         to = self.wire.destination(Parsed(composed.data, composed.message, composed.decoded))
         elsewhere = to is not None and to[0] not in (self.addressing.node, self.wire.anyone)
-        return {"nobody": nobody, "reuses": reuses, "reused": reused, "to": "elsewhere" if elsewhere else None}
+        earlier_kind = [self.sent[s].decoded.get("fields", {}) for s in self.sent if order.index(s) < order.index(ref)
+                        and self.sent[s].message == composed.message and self.sent_from[s] == self.sent_from[ref]]
+        copied = self._spec(ref).get("copies", 1) > 1 and self.answers.get(ref, 0) > 0
+        return {"nobody": nobody, "reuses": reuses, "reused": reused, "to": "elsewhere" if elsewhere else None,
+                "earlier": earlier_kind, "copied": copied}
 
     def _readings(self, step: StepState) -> None:
         """One check per open reading the step met, always in the report: INFO, never a failure; or, for a request's

@@ -199,7 +199,11 @@ def _silent_cover_problem(case, step, ref, sends, exchange, wire, edition, behav
                and exchange is _exchange_of(sends[s], behaviour, wire, edition)]
     reuses = {r["request_field"] for r in exchange.get("correlation", ()) if r["kind"] == "echo"
               and any(same(e.get(r["request_field"]), fields.get(r["request_field"])) for e in earlier)}
-    facts = {"nobody": nobody, "reuses": reuses, "to": "elsewhere" if spec.get("to") not in (None, "node") else None}
+    kind = [sends[s]["fields"] for s in sends if order.index(s) < order.index(ref)
+            and sends[s]["abbrev"] == sends[ref]["abbrev"]]
+    answered = any(s.get("reply_to") == ref and order.index(s["id"]) < order.index(step["id"]) for s in case["steps"])
+    facts = {"nobody": nobody, "reuses": reuses, "to": "elsewhere" if spec.get("to") not in (None, "node") else None,
+             "earlier": kind, "copied": spec.get("copies", 1) > 1 and answered}
     ambiguity = silence_allowed(wire, exchange, fields, edition, facts, behaviour.get("silence", ()))
     if ambiguity is None:
         return None

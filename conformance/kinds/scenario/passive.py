@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 from ...capture.findings import Finding, Watched
 from ...core.verdicts import Verdict
-from .exchanges import States, resolved, seconds, silence_allowed, states_for, weaker
+from .exchanges import States, resolved, seconds, selected, silence_allowed, states_for, weaker
 from .matchers import hashable, same, show
 from .wire import Parsed
 
@@ -26,6 +26,7 @@ LEVELS = {"MUST": Verdict.FAIL, "SHOULD": Verdict.NON_STRICT, "INFO": Verdict.IM
 STATE_CACHE = 1024  # request values whose reply states are kept resolved
 OPEN_LIMIT = 1024  # requests of one exchange followed at once (beyond, the oldest is left unjudged: a flood of
 # requests, or a log whose logging system falls silent while others ask on, leaving its clock standing)
+UNDONE_KEPT = 64  # earlier messages a silence rule's after selects, kept to tell what a later request asks about
 LOSS_GAP = 0.1  # s between two times the frames do not tell all of, below which they are one time
 
 
@@ -83,6 +84,10 @@ class PassiveExchanges:
         self.senders: dict = {}  # system id -> the address and port its frames come from
         self.next_deadline = float("inf")
         self.losses: list[list] = []  # [from, to, why, requesters or None]: times the frames do not tell all of
+        self.undoing = {m: [r["after"] for r in (*self.silence, *(x for rule in rules for x in
+                                                                   rule.exchange.get("silence", ()))) if "after" in r]
+                        for m, rules in self.by_request.items()}  # request message -> what its silence rules' after select
+        self.undone: deque = deque(maxlen=UNDONE_KEPT)  # (frame number, src, dst, fields) of the messages they selected
 
     @property
     def messages(self) -> set[str]:
@@ -106,6 +111,8 @@ class PassiveExchanges:
             if _matches(w.fields, rule.when) and not self._replying(w):
                 out += self._request(rule, w)
                 break
+        if any(selected(self.wire, w.message, w.fields, after, self.edition) for after in self.undoing.get(w.message, ())):
+            self.undone.append((w.number, w.src, w.dst, w.fields))
         return out
 
     def _replying(self, w: Watched) -> bool:
@@ -402,12 +409,15 @@ class PassiveExchanges:
     def _facts(self, o: _Open) -> dict:
         """What the silence rules may select an unanswered request by, as a capture shows it: where it was addressed,
         and (for exchanges whose rules ask) its echoed fields whose value an earlier request of the same requester to
-        the same node carries (``reuses``) or a later one that was answered (``reused``: it may have replaced it)."""
-        facts = {"to": "elsewhere" if o.request.dst == self.nobody else None}
+        the same node carries (``reuses``) or a later one that was answered (``reused``: it may have replaced it); and the
+        earlier messages of its kind from the same requester to the same node that a silence rule's ``after`` selects."""
+        mine = o.request
+        facts = {"to": "elsewhere" if mine.dst == self.nobody else None,
+                 "earlier": [f for n, src, dst, f in self.undone if n < mine.number and src == mine.src and dst == mine.dst]}
         ex = o.rule.exchange
         if not any("reuses" in r or "reused" in r for r in ex.get("silence", ())):
             return facts
-        rid, mine = id(o.rule), o.request
+        rid = id(o.rule)
         others = [p for p in (*self.open[rid], *self.ended[rid]) if p is not o and not p.expired
                   and p.request.src == mine.src and p.request.dst == mine.dst]
         for fact, chosen in (("reuses", [p for p in others if p.request.number < mine.number]),

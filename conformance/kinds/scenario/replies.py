@@ -75,14 +75,24 @@ class Replies:
     def _for_this_speaker(self, step: StepState, parsed: Parsed) -> bool:
         """Whether a frame may be for the step: not when it is addressed to one of the session's systems and
         the step awaits another's (a reply to the request one client sent is not the other client's); a step
-        that awaits no reply takes what is addressed to the system it names (``to``), or to the session's own."""
+        that awaits no reply takes what is addressed to the system it names (``to``; "session": the session's own system
+        and not anyone, "anyone": anyone and not the session's own), or to the session's own or anyone."""
         to = self.wire.destination(parsed)
+        if step.spec.get("to") in ("session", "anyone"):  # the session's own system itself, or anyone (told apart)
+            return to is not None and to[0] == self._addressee(step.spec["to"])
         ours = (self.addressing.system, self.addressing.other, self.addressing.late)
         if to is None or self.addressing.other is None or to[0] not in ours:
             return True
         ref = step.spec.get("reply_to")
         wanted = self.sent_from[ref][0] if ref is not None else self.addressing.speaking_as(step.spec.get("to")).system
         return to[0] == wanted
+
+    def _addressee(self, to: str) -> int | None:
+        """The system a step's ``to`` names: the session's second (other), the late one, the session's own (session)
+        or the destination meaning any system (anyone)."""
+        if to == "anyone":
+            return self.wire.anyone
+        return self.addressing.speaking_as(None if to == "session" else to).system
 
     def _to_this_scenario(self, parsed: Parsed) -> bool:
         """Whether a frame is addressed to this scenario's own entity (no other request of the run comes from it),
@@ -102,7 +112,7 @@ class Replies:
         if ref is not None:
             return to == self.sent_from[ref]
         if "to" in step.spec:
-            return to[0] == self.addressing.speaking_as(step.spec["to"]).system
+            return to[0] == self._addressee(step.spec["to"])
         return to in self.sent_from.values()
 
     def _states(self, step: StepState) -> States | None:

@@ -80,6 +80,8 @@ BREAKS = {
     "late-success": "with its gateway slow, an Iridium message reported EXPIRED at its time to live is reported OK once the gateway answers, long after it",
     "no-lbl-ranges": "with beacons set and an acoustic peer, it never reports an LblRange (a SHOULD; judged only where claimed)",
     "restarts-on-empty-msg": "an AcousticOperation MSG or MSG_SHORT with no message restarts its acoustic service: a RANGE under way never ends (as DUNE's CommManager, which dies on it and is restarted)",
+    "beats-only-when-answered": "it heart-beats only in answer to a peer's Heartbeat (addressed to that peer), never of its own accord: a peer that heart-beats at 1 Hz sees one a second, none goes to anyone (a SHOULD)",
+    "keeps-disbanded-group": "a SystemGroup Dis is ignored: a Req after it reports the group as it was Set (a SHOULD: IMC.xml's Disband)",
     "lists-other-names": "AcousticSystems lists its systems under other names than those it ranges (upper-cased; a SHOULD)",
 }
 
@@ -102,5 +104,8 @@ VARIANTS = {
     "reused-id-cancels": "an AcousticRequest reusing the req_id of an outstanding one cancels it: the first ends in ERROR, the second is not carried out",
     "loses-first-copy": "the first copy of each idempotent request is lost on its way (a targeted loss): only a resend is answered",
     "forwards-on-period": "kept RemoteCommands are forwarded to their recipients on the link only every 30 s (as DUNE's Wi-Fi forwarding), not as they come or as a recipient appears; never an expired one",
+    "answers-heartbeats": "a Heartbeat addressed to it is answered with one addressed to its sender, besides its own every second to anyone",
+    "silent-on-unknown-group": "a SystemGroup Req for a group it does not hold (disbanded, or never Set) goes unanswered",
+    "answers-a-copy-once": "a datagram byte for byte the one it took less than 1 s before is dropped as the link's copy: a duplicated request is answered once",
     "repeat-range-replaces": "a RANGE AcousticOperation to a system a RANGE is under way to replaces it: nothing more is said of the first, the second is carried out",
 }

@@ -44,6 +44,7 @@ MAX_CONTACTS = 64
 CONTACT_TTL = 30.0  # seconds without a frame from a contact before it is forgotten (DUNE's rule)
 FORWARD_PERIOD = 30.0  # seconds between two forwardings of the kept commands (forwards-on-period: DUNE's Wi-Fi period)
 LBL_PERIOD = 2.0  # seconds between two LblRanges while it navigates with LBL (beacons set, an acoustic peer)
+COPY_WINDOW = 1.0  # seconds within which answers-a-copy-once takes a byte-identical datagram for the link's copy
 LBL_RANGE, LBL_STEP = 500.0, 100.0  # metres: the simulated range of the first beacon, and how much further each next one is
 
 
@@ -96,6 +97,7 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
         self.next_traffic, self.ticks = None, 0  # vehicle-traffic
         self.next_forward = None  # forwards-on-period: when the kept commands are next forwarded
         self.next_lbl, self.lbl_turn = None, 0  # LBL navigation: when the next LblRange is due, and for which beacon
+        self.last_datagram: tuple = (b"", float("-inf"))  # answers-a-copy-once: the latest datagram, and when it came
 
     # ------------------------------------------------------------------ the caller's interface
 
@@ -108,6 +110,10 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
 
     def receive(self, t: float, data: bytes, source: tuple) -> None:
         """A datagram arrived from ``source`` (malformed ones are dropped silently, as DUNE does)."""
+        if self.variant == "answers-a-copy-once":  # a byte-identical copy of the datagram just taken: the link's
+            if data == self.last_datagram[0] and t - self.last_datagram[1] < COPY_WINDOW:
+                return
+            self.last_datagram = (data, t)
         try:
             message = codec.decode(self.defs, data)
         except NotJudged:
@@ -168,7 +174,7 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
             del self.contacts[src], self.heard_at[src]
         if self.next_beat is not None and self.next_beat <= t:
             self.next_beat = t + 1.0
-            if self.broken != "no-heartbeat":
+            if self.broken not in ("no-heartbeat", "beats-only-when-answered"):
                 out += [(addr, self._frame(t, "Heartbeat", {}, dst=UNKNOWN_SYSTEM, ent=0)) for addr in self.contacts.values()]
         if self.next_announce is not None and self.next_announce <= t:
             self.next_announce = t + (60.0 if self.variant == "slow-announce" else 10.0)
@@ -239,6 +245,11 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
 
     # ------------------------------------------------------------------ requests
 
+    def _on_Heartbeat(self, t: float, message: dict) -> None:
+        """A peer's Heartbeat: the reference node answers none (as DUNE); some nodes send one back to that peer."""
+        if self.variant == "answers-heartbeats" or self.broken == "beats-only-when-answered":
+            self._reply(t, PROCESSING, message, "Heartbeat", {})
+
     def _on_SystemGroup(self, t: float, message: dict) -> None:
         """Set and Chg store a group's list of systems, Dis forgets it, Req is answered with a Rep."""
         f = message["fields"]
@@ -248,9 +259,10 @@ class ReferenceNode(Acoustic, GatewayRequests, History, Link, Framing):
             self.groups[name] = f["GroupList"]
             while len(self.groups) > MAX_CONTACTS:
                 del self.groups[next(iter(self.groups))]
-        elif action == "Dis":
+        elif action == "Dis" and self.broken != "keeps-disbanded-group":
             self.groups.pop(name, None)
-        elif action == "Req" and self.broken != "no-group-report":
+        elif action == "Req" and self.broken != "no-group-report" and (
+                name in self.groups or self.variant != "silent-on-unknown-group"):
             self._reply(t, PROCESSING, message, "SystemGroup", {"GroupName": f["GroupName"],
                                                                 "Action": self._v("SystemGroup", "Action", "Rep"),
                                                                 "GroupList": self.groups.get(name, "")})
