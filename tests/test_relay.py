@@ -298,3 +298,20 @@ def test_a_console_sending_from_many_ports_is_answered_where_its_announce_says()
     assert relay.accepts("console", ("127.0.0.1", 40002), query)
     assert not relay.accepts("console", ("127.0.0.1", 40003), stranger)
     assert not relay.accepts("vehicle", ("127.0.0.1", 40004), query) and relay.accepts("vehicle", VEHICLE, query)
+
+
+@pytest.mark.parametrize("services", ["imc+udp://127.255.255.255:7777/", "imc+udp://127.0.0.0:7777/"])
+def test_an_announce_naming_the_loopback_broadcast_is_not_where_the_relay_sends(services):
+    """The relay sends to one host on loopback only: an Announce asking to be answered at the loopback network's
+    broadcast or network address is answered where its datagrams come from."""
+    from imc_conformance.relay.core import Relay
+
+    links = {side: Link(Impairment(), 0, side) for side in SIDES}
+    relay = Relay({side: judge() for side in SIDES}, links, FACING, {"console": None, "vehicle": VEHICLE},
+                  **SUITE.relay_hooks())
+    header = {"timestamp": 1.0, "src": 0x3334, "src_ent": 0, "dst": 0xFFFF, "dst_ent": 0xFF}
+    announce = codec.encode(SUITE.defs, {"abbrev": "Announce", "header": header, "fields": {
+        "sys_name": "ccu", "sys_type": 0, "owner": 0xFFFF, "lat": 0.0, "lon": 0.0, "height": 0.0,
+        "services": services}}, "le")
+    relay.inbound(0.0, "console", announce, ("127.0.0.1", 40001))
+    assert relay.endpoints["console"] == ("127.0.0.1", 40001)

@@ -17,8 +17,6 @@ from ..errors import UsageError
 from .options import add_judging, add_reports
 
 REFRESH = 1.0  # seconds between progress lines
-LOOPBACK = ipaddress.ip_network("127.0.0.0/8")
-LOOPBACK_NOT_HOSTS = {LOOPBACK.broadcast_address: "broadcast", LOOPBACK.network_address: "network"}
 
 
 def add(sub) -> None:
@@ -46,6 +44,7 @@ def add(sub) -> None:
 
 def loopback(text: str, what: str, bind: bool = False) -> tuple[int, tuple]:
     """(family, address) of a loopback endpoint; UsageError in one line for any other."""
+    from ..relay.core import LOOPBACK_NOT_HOSTS
     from ..sessions.udp import parse_endpoint, resolve
 
     try:

@@ -12,6 +12,7 @@ loss of the link, counted."""
 from __future__ import annotations
 
 import heapq
+import ipaddress
 import itertools
 from collections import Counter
 from dataclasses import dataclass
@@ -26,6 +27,18 @@ SIDES = ("console", "vehicle")
 OTHER = {"console": "vehicle", "vehicle": "console"}
 IN_FLIGHT_LIMIT = 32 << 20  # bytes one direction holds on the way; a datagram beyond is lost (a full buffer)
 BLAME = "/by-"  # how a finding's case names the side it blames until ``side_id`` files it
+LOOPBACK = ipaddress.ip_network("127.0.0.0/8")
+LOOPBACK_NOT_HOSTS = {LOOPBACK.broadcast_address: "broadcast", LOOPBACK.network_address: "network"}
+
+
+def loopback_host(address: str) -> bool:
+    """Whether ``address`` (an IP, text) is one host's on loopback: never another host's, a group's or the loopback
+    network's broadcast (the relay talks to nothing else)."""
+    try:
+        ip = ipaddress.ip_address(address.split("%")[0])
+    except ValueError:
+        return False
+    return ip.is_loopback and ip not in LOOPBACK_NOT_HOSTS
 
 
 @dataclass(slots=True)
@@ -128,6 +141,8 @@ class Relay:
             self.sources[side] = source
         if self.endpoints[side] is None or (side == "console" and self.endpoints[side] == self.sources[side]):
             asked = self.reply_to(data) if self.reply_to is not None else None
+            if asked is not None and not loopback_host(asked[0]):  # whatever a suite's hook reads from a frame
+                asked = None
             self.endpoints[side] = asked or self.endpoints[side] or source
         origin, relay, to = source, self.facing[side], OTHER[side]
         self.counts[side]["sent"] += 1
