@@ -145,29 +145,28 @@ class CaptureJudge:
 
     def _observe(self, w: Watched) -> None:
         """Follow the exchanges through a watched frame."""
-        for finding in self.tracker.observe(w):
-            if not self.groups or finding.group in self.groups:
-                self._tally(finding)
+        self._tally_selected(self.tracker.observe(w))
 
     def _due(self, now: float) -> None:
         """Judge the exchanges whose bound passed by ``now`` on a log's clock (it runs on every frame)."""
-        for finding in self.tracker.due(now):
-            if not self.groups or finding.group in self.groups:
-                self._tally(finding)
+        self._tally_selected(self.tracker.due(now))
 
     def _split(self) -> None:
         """The log's clock jumped: a new stretch begins, and the exchanges open are closed."""
         findings, count = self.tracker.split("the log's clock jumped meanwhile")
+        self._tally_selected(findings)
+        self.across += count
+
+    def _tally_selected(self, findings) -> None:
+        """Tally the findings of the messages the selection holds (all, where it names none)."""
         for finding in findings:
             if not self.groups or finding.group in self.groups:
                 self._tally(finding)
-        self.across += count
 
     def found(self, f: Finding, source: str = "") -> None:
         """Tally what a log says of its frames (a bag connection's definition), as it is found."""
         self._from(source)
-        if not self.groups or f.group in self.groups:
-            self._tally(f)
+        self._tally_selected((f,))
 
     def _from(self, source: str) -> None:
         """Note that what follows comes from the file ``source`` names (several files judged at once)."""
@@ -288,9 +287,7 @@ class CaptureJudge:
             end = min(end, self.origin + self.selection.end)
         if self.flood is not None:
             end = min(end, self.flood)
-        for finding in self.tracker.finish(end):
-            if not self.groups or finding.group in self.groups:
-                self._tally(finding)
+        self._tally_selected(self.tracker.finish(end))
         for group, (n, first, last) in self.valid.items():
             tally = self.tallies.setdefault((group, "frame/valid"), _Tally(FRAME_CLAUSE))
             tally.counts[Verdict.PASS] += n
