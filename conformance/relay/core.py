@@ -69,6 +69,9 @@ class _Blamed:
     def observe(self, w):
         return self._named(self.tracker.observe(w))
 
+    def due(self, now: float):
+        return self._named(self.tracker.due(now))
+
     def finish(self, end: float):
         return self._named(self.tracker.finish(end))
 
