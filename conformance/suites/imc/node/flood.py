@@ -34,7 +34,11 @@ def flood_rows(floods=FLOODS) -> dict[str, float]:
         node = subprocess.Popen([sys.executable, "-m", "imc_conformance.cli", "serve", "--port", "0"],
                                 stderr=subprocess.PIPE, text=True)
         try:
-            host, port = re.search(r"udp://([\d.]+):(\d+)", node.stderr.readline()).groups()
+            line = node.stderr.readline()
+            listening = re.search(r"udp://([\d.]+):(\d+)", line)
+            if listening is None:
+                raise SystemExit(f"the reference node did not say where it listens: {line.strip() or 'nothing'}")
+            host, port = listening.groups()
             out["node flood memory 0"] = peak_mb(node.pid)
             replies = flood(suite.defs, codec, (host, int(port)), samples)
             out[f"node flood reply {samples}"] = max(replies)
