@@ -56,11 +56,16 @@ def relay_flood(seconds: float = SECONDS, env: dict | None = None) -> dict[str, 
                     sent += 1
                 except OSError:  # the kernel's buffers full a moment
                     time.sleep(0.001)
-            out, _ = measuring.communicate(timeout=seconds + 120)
+            try:
+                out, _ = measuring.communicate(timeout=seconds + 120)
+            except subprocess.TimeoutExpired:
+                raise SystemExit(f"relay under a flood did not end within {seconds + 120:g} s") from None
         finally:
             if measuring.poll() is None:
                 measuring.kill()
                 measuring.wait()
+        if len(out.split()) != 2:  # the measuring process ended before it could print
+            raise SystemExit(f"relay under a flood: no exit code and peak memory measured ({out.strip() or 'nothing'})")
         code, peak = out.split()
         if int(code) not in (0, 1, 2) or not report.exists():  # 2: a flood of no frames judges nothing
             raise SystemExit(f"relay under a flood ended with exit code {code} and no report")
