@@ -32,7 +32,7 @@ def command(args) -> int:
     files = sorted(p for p in source.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
     try:
         if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
-            raise UsageError(f"{printable(args.folder)}: {'not empty' if folder.is_dir() else 'exists and is not a folder'}"
+            raise UsageError(f"{args.folder}: {'not empty' if folder.is_dir() else 'exists and is not a folder'}"
                              ": adapter-kit writes into a new or empty folder")
         for path in files:
             target = folder / path.relative_to(source)
@@ -43,7 +43,7 @@ def command(args) -> int:
             target.write_bytes(text)
         (folder / CONTRACT_NAME).write_bytes(CONTRACT.read_bytes())
     except OSError as exc:
-        raise UsageError(f"{printable(args.folder)}: cannot write the kit: {exc.strerror or exc}") from None
+        raise UsageError(f"{args.folder}: cannot write the kit: {exc.strerror or exc}") from None
     print(f"{printable(args.folder)}: the {args.language} starter ({len(files)} files) and the adapter contract "
           f"({CONTRACT_NAME}); its README.md says how to build it, check it with adapter-check and run the suite on it")
     return 0
