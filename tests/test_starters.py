@@ -103,6 +103,13 @@ def test_the_adapter_kit_copies_a_starter_and_the_contract_out_of_the_package(la
     assert "not empty" in capsys.readouterr().err
 
 
+def test_an_adapter_kit_folder_the_system_cannot_look_at_is_a_one_line_error(tmp_path, capsys):
+    kit = tmp_path / ("x" * 300)  # longer than a file name may be: the folder cannot even be looked up
+    assert main(["adapter-kit", "python", str(kit)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot write the kit" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
 def test_the_python_kit_passes_adapter_check_from_its_own_folder(tmp_path, capsys):
     """What a newcomer with only the wheel does: the kit written, its starter checked where it was written."""
     from imc_conformance.paths import CONTRACT

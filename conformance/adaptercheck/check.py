@@ -22,6 +22,7 @@ from ..core.hello import check_hello
 from ..core.session import AdapterStartError, Answer, Job, Request
 from ..core.verdicts import Verdict
 from ..sessions.subprocess import SubprocessSession
+from ..wording import counted
 from . import wire
 from .mistakes import Mistake, value_mistake
 from .probes import FEATURES, Probe, choose, first_frames
@@ -112,8 +113,8 @@ def _reach(session, suite, kind, cases: list, edition: str, out: Outcome) -> set
     if reads:
         shown = ", ".join(out.reads[:8]) + (f" and {len(out.reads) - 8} more" if len(out.reads) > 8 else "")
         total = len(set(groups.values()))
-        out.passed.append(f"a first pass of {len(jobs)} decodes: it reads {len(out.reads)} of {total} "
-                          f"{suite.group_label}{'s' if total != 1 else ''} ({shown}); the probes go to those")
+        out.passed.append(f"a first pass of {len(jobs)} decodes: it reads {len(out.reads)} of "
+                          f"{counted(total, suite.group_label)} ({shown}); the probes go to those")
     return reads
 
 

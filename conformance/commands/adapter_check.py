@@ -29,6 +29,7 @@ def command(args) -> int:
     from ..paths import CONTRACT
     from .adapters import adapter_choice, open_session
     from ..arguments import chosen_edition, known_groups
+    from ..wording import counted
 
     suite, cases = open_corpus(args.suite)
     edition = chosen_edition(suite, args.edition)
@@ -68,7 +69,7 @@ def command(args) -> int:
             print(f"  … and {len(same) - SHOWN} more like these")
         print(f"  fix:  {fix_in(same[0].code, language(argv))}")
     if kinds:
-        print(f"{len(kinds)} kind{'s' if len(kinds) != 1 else ''} of mistake: the adapter does not speak the contract "
+        print(f"{counted(len(kinds), 'kind')} of mistake: the adapter does not speak the contract "
               f"yet (the contract: {CONTRACT})")
         return 1
     print(f"the adapter speaks the contract ({CONTRACT}); next: imc-conformance run with the same options")

@@ -29,11 +29,11 @@ def command(args) -> int:
     from ..paths import CONTRACT, STARTERS
 
     source, folder = STARTERS / args.language, Path(args.folder)
-    if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
-        raise UsageError(f"{args.folder}: {'not empty' if folder.is_dir() else 'exists and is not a folder'}: "
-                         "adapter-kit writes into a new or empty folder")
     files = sorted(p for p in source.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
     try:
+        if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
+            raise UsageError(f"{args.folder}: {'not empty' if folder.is_dir() else 'exists and is not a folder'}"
+                             ": adapter-kit writes into a new or empty folder")
         for path in files:
             target = folder / path.relative_to(source)
             target.parent.mkdir(parents=True, exist_ok=True)

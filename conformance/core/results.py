@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field
 
 from .cases import source_case
 from .causes import Cause, cause_from, group_causes, regrouped
+from ..wording import counted
 from .verdicts import ATTENTION, UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"
@@ -185,17 +186,17 @@ class RunResult:
         counts = Counter(m.verdict for m in self.messages)
         untested = counts["UNSUPPORTED"] + counts["INCONCLUSIVE"]
         if untested == total:
-            return f"{verdict}, none of {_messages(total)} tested"
+            return f"{verdict}, none of {counted(total, 'message')} tested"
         if verdict == "PASS":
             passed = counts["PASS"] + counts["WAIVED"]
             head = ("PASS" + (" with waivers" if counts["WAIVED"] else "") +
-                    (f" for all {_messages(total)}" if passed == total > 1 else f" for {passed} of {_messages(total)}"))
+                    (f" for all {counted(total, 'message')}" if passed == total > 1 else f" for {passed} of {counted(total, 'message')}"))
             parts = [f"{counts['WAIVED']} with failures waived"] if counts["WAIVED"] else []
         elif counts["FAIL"]:
-            head = f"{verdict} for {counts['FAIL']} of {_messages(total)}"
+            head = f"{verdict} for {counts['FAIL']} of {counted(total, 'message')}"
             parts = [f"{counts['PASS']} pass{'es' if counts['PASS'] == 1 else ''}"] if counts["PASS"] else []
         else:
-            head = f"{verdict}, {counts['PASS']} of {_messages(total)} pass{'es' if counts['PASS'] == 1 else ''}"
+            head = f"{verdict}, {counts['PASS']} of {counted(total, 'message')} pass{'es' if counts['PASS'] == 1 else ''}"
             parts = []
         if counts["WAIVED"] and verdict != "PASS":
             parts.append(f"{counts['WAIVED']} waived")
@@ -327,7 +328,6 @@ def message_verdict(cases: list[CaseResult], strict: bool) -> str:
     return "PASS"
 
 
-
 def case_dict(c: CaseResult, memo: dict | None = None) -> dict:
     """A case as its JSON form; ``memo`` keeps the form of each check object already written (checks are shared
     between cases where they are equal, e.g. a PASS)."""
@@ -372,7 +372,3 @@ def case_from(d: dict, message: str) -> CaseResult:
               for k in d["checks"]]
     return CaseResult(d["id"], message, Verdict(d["verdict"]), d["expect"], d["clause"], checks, d.get("rule"),
                       d.get("errata", []), d.get("waiver"), d.get("timeline", []))
-
-
-def _messages(n: int) -> str:
-    return f"{n} message{'' if n == 1 else 's'}"

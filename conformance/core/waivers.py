@@ -21,6 +21,7 @@ import datetime as dt
 from dataclasses import dataclass, replace
 from fnmatch import fnmatchcase
 
+from ..wording import counted
 from .cases import source_case
 from .causes import cause_of, group_causes, key_problem
 from .verdicts import Verdict, failing, worst
@@ -191,7 +192,7 @@ def to_waive(result) -> tuple[list, list[str]]:
         elif case.verdict is Verdict.WAIVED or (case.verdict is not Verdict.WAIVER_STALE
                                                 and failing(case.verdict, result.strict)):
             out.append(case)
-    said = [f"no waiver written for {len(broken)} ADAPTER_ERROR case{'s' if len(broken) != 1 else ''} ({broken[0]}"
+    said = [f"no waiver written for {counted(len(broken), 'ADAPTER_ERROR case')} ({broken[0]}"
             f"{', ...' if len(broken) > 1 else ''}): an adapter error is the adapter's to fix (adapter-check)"] if broken else []
     return out, said
 
@@ -234,6 +235,6 @@ def cause_waivers_document(result, reason: str, data: dict[str, dict]) -> tuple[
         if case.id not in grouped:
             by_id.setdefault(source_case(case.id), reasons[case.id] or f"{case.verdict.value}: {reason}")
     if by_id:
-        notes.append(f"{len(by_id)} case{'s' if len(by_id) != 1 else ''} of no cause ({', '.join(sorted({c.verdict.value for c in plain if c.id not in grouped}))}) "
+        notes.append(f"{counted(len(by_id), 'case')} of no cause ({', '.join(sorted({c.verdict.value for c in plain if c.id not in grouped}))}) "
                      "waived by id")
     return {"waivers": out + [{"id": cid, "reason": why} for cid, why in by_id.items()]}, notes

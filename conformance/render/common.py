@@ -1,4 +1,4 @@
-"""What every report format shares: verdict order, the overall verdict, timelines and incidents as text (the
+"""What every report format shares: verdict order, timelines and incidents as text (the
 escaping of implementation text is ``escaping``'s)."""
 
 from __future__ import annotations
@@ -12,11 +12,6 @@ from ..core.verdicts import ATTENTION, Verdict
 
 VERDICTS = tuple(Verdict)
 TIMELINE_LIMIT = 60  # timeline entries a report shows per case (the JSON result has them all)
-
-def overall(result: RunResult) -> str:
-    """PASS, FAIL, ERROR (an adapter error), INCONCLUSIVE (nothing could be tested) or INCOMPLETE (interrupted),
-    from the run's exit code (``RunResult.overall``)."""
-    return result.overall()
 
 
 def timeline_lines(case: CaseResult, limit: int = TIMELINE_LIMIT) -> list[str]:

@@ -17,7 +17,7 @@ from ..core.results import ByteDiff
 from ..core.verdicts import Verdict
 from ..core.results import FORMAT, CaseResult, RunResult
 from ..escaping import clean
-from .common import (TIMELINE_LIMIT, attention, cause_numbers, decided_at, errata_text, incident_lines, overall,
+from .common import (TIMELINE_LIMIT, attention, cause_numbers, decided_at, errata_text, incident_lines,
                      provenance_lines, verdict_columns, waived)
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -60,7 +60,7 @@ def render_html(result: RunResult) -> str:
     stderr = clean(result.stderr)
     others = [{"case": c, **timeline_view(c)} for c in result.cases if c.timeline and c.id not in anchors]
     return environment().get_template("report.html.j2").render(
-        result=result, overall=overall(result), headline=result.headline(), columns=verdict_columns(result), tone=TONE, failures=shown, causes=causes,
+        result=result, overall=result.overall(), headline=result.headline(), columns=verdict_columns(result), tone=TONE, failures=shown, causes=causes,
         incidents=incident_lines(result), provenance=provenance_lines(result), format=FORMAT,
         failing_total=len(failing), first_failure=first, group_tone=GROUP_TONE, stderr=stderr[:MAX_STDERR],
         stderr_cut=max(0, len(stderr) - MAX_STDERR), timelines=others,

@@ -8,7 +8,7 @@ from ..core.verdicts import Verdict
 from ..core.results import RunResult
 from ..escaping import clean
 from ..wording import counted
-from .common import (TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, overall, provenance_lines,
+from .common import (TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, provenance_lines,
                      verdict_columns, waived)
 
 EMOJI = {
@@ -38,7 +38,7 @@ def cell(text: str, limit: int | None = None) -> str:
 
 
 def render_markdown(result: RunResult) -> str:
-    verdict = overall(result)
+    verdict = result.overall()
     columns = verdict_columns(result)
     total = len(result.cases)
     lines = [

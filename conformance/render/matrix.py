@@ -12,7 +12,6 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 from ..core.results import RunResult
-from .common import overall
 
 @dataclass
 class Column:
@@ -60,7 +59,7 @@ def build(results: list[tuple[str, RunResult]], by_case: bool) -> list[Table]:
     for label, r in results:
         key = (r.suite, r.edition)
         table = tables.get(key) or tables.setdefault(key, Table(r.suite, r.title, r.edition, []))
-        table.columns.append(Column(label, r.implementation, kind_of(r), overall(r), r.duration))
+        table.columns.append(Column(label, r.implementation, kind_of(r), r.overall(), r.duration))
     for (suite, edition), table in tables.items():
         members = [r for _, r in results if (r.suite, r.edition) == (suite, edition)]
         if by_case:

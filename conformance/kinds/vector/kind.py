@@ -81,7 +81,6 @@ class VectorCodec(Protocol):
         answer to ``op`` (decode, encode, roundtrip)."""
 
 
-CAPABILITIES: dict[tuple, str] = {}  # (op, encoding) -> what an answer shows or needs, made once
 VALID_PASS = {"decode": "decoded as expected", "encode": "frame matches", "roundtrip": "re-encoded to the same frame"}
 
 
@@ -332,11 +331,9 @@ class VectorKind:
     def capability(case: dict, request: Request) -> str | None:
         """What an answer to ``request`` shows (answered, for a valid case) or needs (a refusal): ``decode-<encoding>``
         (a roundtrip too) or ``encode-<encoding>``; None for a description."""
-        key = (request.op, request.encoding)
-        found = CAPABILITIES.get(key)
-        if found is None and request.op != "describe":
-            found = CAPABILITIES[key] = f"{'encode' if request.op == 'encode' else 'decode'}-{request.encoding}"
-        return found
+        if request.op == "describe":
+            return None
+        return f"{'encode' if request.op == 'encode' else 'decode'}-{request.encoding}"
 
     @staticmethod
     def unproven(check: CheckResult, group: str, capability: str) -> CheckResult:
