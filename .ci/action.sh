@@ -3,7 +3,7 @@
 #   action.sh install   a virtual environment at $IMC_VENV with the suite from $IMC_SOURCE (a folder or a wheel) and
 #                       the extras $IMC_EXTRAS (comma-separated: imcpy, pyimclsts, ros); its bin/ put on $GITHUB_PATH
 #   action.sh run       imc-conformance run with $IMC_ADAPTER_CMD or $IMC_ADAPTER, $IMC_SUITE, $IMC_WAIVERS, each message
-#                       of $IMC_REQUIRE as --require (blank-separated), and the options in $IMC_ARGS (split on
+#                       of $IMC_REQUIRE as --require (split as $IMC_ARGS is), and the options in $IMC_ARGS (split on
 #                       any whitespace, newlines included, never by a shell; quotes and backslashes refused);
 #                       JSON, JUnit and HTML reports written
 #                       to $IMC_JSON, $IMC_JUNIT, $IMC_HTML; the Markdown summary appended to $GITHUB_STEP_SUMMARY when
@@ -11,6 +11,10 @@
 #                       to $GITHUB_OUTPUT as exit-code.
 # Every input arrives in an environment variable: none is ever pasted into a shell command.
 set -euo pipefail
+
+# words NAME TEXT: the array NAME holds the words of TEXT, split on any whitespace (blanks, tabs, newlines: every line
+# of a YAML block, not the first alone), never by a shell.
+words() { IFS=$' \t\r\n' read -r -d '' -a "$1" <<< "$2" || true; }
 
 case "${1:-}" in
 install)
@@ -28,7 +32,10 @@ run)
   if [ -n "${IMC_ADAPTER:-}" ]; then argv+=(--adapter "$IMC_ADAPTER"); fi
   if [ -n "${IMC_SUITE:-}" ]; then argv+=(--suite "$IMC_SUITE"); fi
   if [ -n "${IMC_WAIVERS:-}" ]; then argv+=(--waivers "$IMC_WAIVERS"); fi
-  if [ -n "${IMC_REQUIRE:-}" ]; then read -r -a required <<< "$IMC_REQUIRE"; for m in "${required[@]}"; do argv+=(--require "$m"); done; fi
+  if [ -n "${IMC_REQUIRE:-}" ]; then
+    words required "$IMC_REQUIRE"
+    for m in ${required[@]+"${required[@]}"}; do argv+=(--require "$m"); done
+  fi
   if [ -n "${IMC_ARGS:-}" ]; then
     case "$IMC_ARGS" in
     *[\"\'\\]*)
@@ -38,7 +45,7 @@ run)
       exit 2
       ;;
     esac
-    IFS=$' \t\r\n' read -r -d '' -a extra <<< "$IMC_ARGS" || true  # every line of a YAML block, not the first alone
+    words extra "$IMC_ARGS"
     argv+=(${extra[@]+"${extra[@]}"})
   fi
   argv+=(--json "${IMC_JSON:-conformance.json}" --junit "${IMC_JUNIT:-conformance-junit.xml}"

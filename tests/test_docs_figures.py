@@ -56,16 +56,21 @@ def number(text: str) -> int:
     return int(text.replace(",", ""))
 
 
-def test_every_corpus_figure_a_page_gives_is_the_corpus():
+def stale_figures(text: str) -> list[tuple[str, list]]:
+    """Each figure of ``text`` the corpus does not give, with the ones it gives."""
     figures, wrong = corpus(), []
-    for path in PAGES:
-        text, where = prose(path), path.relative_to(CHECKOUT)
-        for m in FIGURE.finditer(text):
-            if number(m[1]) not in figures[m[2]]:
-                wrong.append(f"{where}: {m[0]!r} (the corpus: {sorted(figures[m[2]])})")
-        for m in CORPUS.finditer(text):
-            if (number(m[1]), number(m[2])) not in figures["over"]:
-                wrong.append(f"{where}: {m[0]!r} (the corpus: {sorted(figures['over'])})")
+    for m in FIGURE.finditer(text):
+        if number(m[1]) not in figures[m[2]]:
+            wrong.append((m[0], sorted(figures[m[2]])))
+    for m in CORPUS.finditer(text):
+        if (number(m[1]), number(m[2])) not in figures["over"]:
+            wrong.append((m[0], sorted(figures["over"])))
+    return wrong
+
+
+def test_every_corpus_figure_a_page_gives_is_the_corpus():
+    wrong = [f"{path.relative_to(CHECKOUT)}: {found!r} (the corpus: {known})"
+             for path in PAGES for found, known in stale_figures(prose(path))]
     assert wrong == []
 
 
@@ -73,7 +78,7 @@ def test_a_stale_scenario_count_is_found(tmp_path):
     page = tmp_path / "page.md"
     page.write_text(f"The whole set ({max(corpus()['scenarios']) + 1} scenarios) against a node, "
                     "(63 scenarios when measured).\n\n```console\n$ run\n9 scenarios\n```\n", encoding="utf-8")
-    found = [m[0] for m in FIGURE.finditer(prose(page)) if number(m[1]) not in corpus()["scenarios"]]
+    found = [found for found, _ in stale_figures(prose(page))]
     assert found == [f"{max(corpus()['scenarios']) + 1} scenarios"]
 
 

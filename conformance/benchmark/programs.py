@@ -11,28 +11,27 @@ from ..files import open_corpus
 from .measure import COUNTS, EDITION, ROS_EDITION, median_of, timed
 
 
-def subprocess_rows(suite, cases, repeat: int, sample_size: int) -> dict[str, float]:
+def through(argv: list[str], name: str, suite, cases, edition: str, **options) -> None:
+    """One run of ``cases`` through a subprocess session of ``argv`` (``options``: the session's), closed after."""
     from ..sessions.subprocess import SubprocessSession
 
-    shim = suite.adapters["imcpy-shim"].argv()
+    session = SubprocessSession(argv, name=name, encoding_param=suite.encoding_param, **options)
+    try:
+        run_cases(session, suite, cases, edition=edition, adapter=name)
+    finally:
+        session.close()
 
-    def through(batch: bool):
-        session = SubprocessSession(shim, name="imcpy-shim", encoding_param=suite.encoding_param, batch=batch)
-        try:
-            run_cases(session, suite, cases, edition=EDITION, adapter="imcpy-shim")
-        finally:
-            session.close()
-    out = {"subprocess": median_of(repeat, lambda: through(True)),
-           "subprocess per line": median_of(repeat, lambda: through(False))}
+
+def subprocess_rows(suite, cases, repeat: int, sample_size: int) -> dict[str, float]:
+    shim = suite.adapters["imcpy-shim"].argv()
+    out = {"subprocess": median_of(repeat, lambda: through(shim, "imcpy-shim", suite, cases, EDITION, batch=True)),
+           "subprocess per line": median_of(repeat, lambda: through(shim, "imcpy-shim", suite, cases, EDITION,
+                                                                    batch=False))}
     sample = cases[:: max(1, len(cases) // sample_size)][:sample_size]
 
     def one_process_each():
         for case in sample:
-            session = SubprocessSession(shim, name="imcpy-shim", encoding_param=suite.encoding_param)
-            try:
-                run_cases(session, suite, [case], edition=EDITION, adapter="imcpy-shim")
-            finally:
-                session.close()
+            through(shim, "imcpy-shim", suite, [case], EDITION)
     out["process per case"] = timed(one_process_each) * len(cases) / len(sample)
     COUNTS["subprocess"] = COUNTS["subprocess per line"] = len(cases)
     n = len(cases)
@@ -46,7 +45,6 @@ def compiled_rows(suite, cases, repeat: int) -> dict[str, float]:
     """The C++ programs through the subprocess session beside Python implementations through the same session:
     DUNE's codec against the imcpy shim (whole IMC corpus), roscpp against rosbags in a worker process (the
     ros_acomms corpus but for the cases roscpp crashes on by erratum C1, whose restarts would be timed)."""
-    from ..sessions.subprocess import SubprocessSession
     from ..suites.imc.dune.codec import argv as dune_argv
     from ..suites.ros_acomms.roscpp import argv as roscpp_argv
 
@@ -59,13 +57,7 @@ def compiled_rows(suite, cases, repeat: int) -> dict[str, float]:
             "subprocess rosbags worker": (ros, ros_cases, ROS_EDITION, worker)}
     out = {}
     for row, (which, selected, edition, argv) in runs.items():
-        def through():
-            session = SubprocessSession(argv, name=row, encoding_param=which.encoding_param, hello_timeout=60)
-            try:
-                run_cases(session, which, selected, edition=edition, adapter=row)
-            finally:
-                session.close()
-        out[row] = median_of(repeat, through)
+        out[row] = median_of(repeat, lambda: through(argv, row, which, selected, edition, hello_timeout=60))
         COUNTS[row] = len(selected)
     print(f"subprocess, compiled: DUNE's C++ codec {COUNTS['subprocess dune-cpp'] / out['subprocess dune-cpp']:,.0f} "
           f"cases/s ({len(cases)} IMC cases); roscpp {COUNTS['subprocess roscpp'] / out['subprocess roscpp']:,.0f} "

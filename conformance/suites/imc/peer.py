@@ -115,7 +115,7 @@ class ImcPeer:
             return True
         header = parsed.decoded["header"]
         ours = (self.system, self.other) + ((self.late,) if self.appeared else ())
-        return header["src"] not in ours + (self.late,) and header["dst"] in ours + (0xFFFF, 0)
+        return not self.own(parsed) and header["dst"] in ours + (0xFFFF, 0)
 
     def own(self, parsed) -> bool:
         return parsed.decoded is not None and parsed.decoded["header"]["src"] in (self.system, self.other, self.late)

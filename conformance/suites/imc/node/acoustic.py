@@ -46,13 +46,13 @@ class Acoustic:
             state(PROCESSING, "MSG_FAILURE" if self.broken == "unsupported-as-failure" else "UNSUPPORTED")
         if op not in plans:
             return  # a state (sent by another node), not a request
-        if self.broken == "dies-on-empty-msg" and op in ("MSG", "MSG_SHORT") and f["msg"] is None:
-            self.acoustic_dead = True  # as DUNE's CommManager, which dereferences the missing message
-            return
-        if self.broken == "restarts-on-empty-msg" and op in ("MSG", "MSG_SHORT") and f["msg"] is None:
-            self.cancelled.update(tag for tag, _ in self.ranging.values())  # as DUNE's CommManager, restarted
-            self.ranging.clear()
-            self.modem_free_at = t
+        if self.broken in ("dies-on-empty-msg", "restarts-on-empty-msg") and op in ("MSG", "MSG_SHORT") and f["msg"] is None:
+            if self.broken == "dies-on-empty-msg":  # as DUNE's CommManager, which dereferences the missing message
+                self.acoustic_dead = True
+            else:  # as DUNE's CommManager, restarted
+                self.cancelled.update(tag for tag, _ in self.ranging.values())
+                self.ranging.clear()
+                self.modem_free_at = t
             return
         distance = self.peers.get(text_of(f["system"]))
         if distance is None and self.variant == "silent-to-unknown-systems":

@@ -28,18 +28,12 @@ class Link:
         at random (``loss``) a request or reply of an idempotent exchange; never more than ``LOSS_RUN``
         copies of one message (a scenario resends a few times: a link that loses every try is a dead link, not a
         lossy one; counted per message, not per kind, as other traffic between two tries must not reset it)."""
-        if self.variant == "loses-first-copy" and not reply and self._idempotent(message, reply):
-            key = (message["abbrev"], repr(message["fields"]))
-            first = key not in self.loss_runs
-            self.loss_runs[key] = 1
-            if len(self.loss_runs) > MAX_LOSS_KEYS:
-                self.loss_runs.clear()
-            return first
-        if not self.loss or not self._idempotent(message, reply):
+        targeted = self.variant == "loses-first-copy"  # a loss certain for a request's first copy, of no reply
+        if (reply if targeted else not self.loss) or not self._idempotent(message, reply):
             return False
         key = (message["abbrev"], repr(message["fields"]))  # a resent request, or its reply, is the same message
         dropped = self.loss_runs.get(key, 0)
-        lost = dropped < LOSS_RUN and self.rng.random() < self.loss
+        lost = dropped < (1 if targeted else LOSS_RUN) and (targeted or self.rng.random() < self.loss)
         if lost:
             if len(self.loss_runs) >= MAX_LOSS_KEYS:
                 self.loss_runs.clear()
