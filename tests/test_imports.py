@@ -30,7 +30,7 @@ from pathlib import Path
 LAYERS = [
     ("core", ["core"]),
     ("base", ["", "limits", "errors", "escaping", "paths", "inputs", "cache", "schemas", "arguments", "adapter_api",
-              "native", "restart", "wording"]),
+              "native", "restart"]),
     ("capture", ["capture"]),
     ("kinds", ["kinds"]),
     ("relay", ["relay"]),

@@ -22,7 +22,7 @@ from ..core.hello import check_hello
 from ..core.session import AdapterStartError, Answer, Job, Request
 from ..core.verdicts import Verdict
 from ..sessions.subprocess import SubprocessSession
-from ..wording import counted
+from ..core.wording import counted
 from . import wire
 from .mistakes import Mistake, value_mistake
 from .probes import FEATURES, Probe, choose, first_frames

@@ -9,7 +9,7 @@ import time
 
 from ..core.hello import check_hello
 from ..core.session import AdapterStartError
-from ..sessions.channel import EXIT_DRAIN, _parse as parse_line, _snippet as snippet
+from ..sessions.channel import EXIT_DRAIN, parse_line, snippet
 from .mistakes import Mistake
 
 HELLO_ID, UNKNOWN_OP_ID = 1, 2

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 from ..core.results import CaseResult, CheckResult, MessageResult, RunResult, message_verdict
 from ..core.verdicts import Verdict, worst
-from ..wording import counted
+from ..core.wording import counted
 from .clocks import CHOOSE, CHOOSE_BYTES, CLOCK_BACK, CLOCK_JUMP, CONFIRM, NEVER, LogClocks
 from .datagrams import Datagram, Dissector, describe_linktype
 from .findings import CaptureRules, Finding, Watched

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections import Counter
 
-from ..wording import counted
+from ..core.wording import counted
 
 LISTED = 8  # messages named in a note
 

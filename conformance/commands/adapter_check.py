@@ -29,7 +29,7 @@ def command(args) -> int:
     from ..paths import CONTRACT
     from .adapters import adapter_choice, open_session
     from ..arguments import chosen_edition, known_groups
-    from ..wording import counted
+    from ..core.wording import counted
 
     suite, cases = open_corpus(args.suite)
     edition = chosen_edition(suite, args.edition)

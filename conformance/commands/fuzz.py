@@ -12,7 +12,7 @@ from pathlib import Path
 from ..arguments import count, fuzz_count, megabytes, positive_seconds, timeout_seconds
 from ..errors import UsageError
 from .options import DEFAULT_MEMORY_MB, add_reports, add_suite, add_target
-from ..wording import counted
+from ..core.wording import counted
 
 DEFAULT_BUDGET = 100
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from ..errors import UsageError
 from ..escaping import printable
 from .options import add_adapter, add_reports, add_selection, add_target
-from ..wording import counted
+from ..core.wording import counted
 
 
 def add(sub) -> None:

@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, field
 
 from .cases import source_case
 from .causes import Cause, cause_from, group_causes, regrouped
-from ..wording import counted
+from .wording import counted
 from .verdicts import ATTENTION, UNTESTED, Verdict, failing
 
 FORMAT_NAME = "imc-conformance-result"

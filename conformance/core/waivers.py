@@ -21,7 +21,7 @@ import datetime as dt
 from dataclasses import dataclass, replace
 from fnmatch import fnmatchcase
 
-from ..wording import counted
+from .wording import counted
 from .cases import source_case
 from .causes import cause_of, group_causes, key_problem
 from .verdicts import Verdict, failing, worst

@@ -7,7 +7,7 @@ import re
 from ..core.verdicts import Verdict
 from ..core.results import RunResult
 from ..escaping import clean
-from ..wording import counted
+from ..core.wording import counted
 from .common import (TIMELINE_LIMIT, attention, cause_numbers, errata_text, incident_lines, provenance_lines,
                      verdict_columns, waived)
 

@@ -14,7 +14,7 @@ from rich.table import Table
 from ..core.results import RunResult
 from ..core.verdicts import Verdict, failing
 from ..escaping import printable
-from ..wording import counted
+from ..core.wording import counted
 from .common import cause_line, incident_lines, provenance_lines, timeline_lines, waived
 
 COLUMNS = (Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.IMPL_DEFINED, Verdict.WAIVED)

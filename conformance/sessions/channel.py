@@ -23,7 +23,7 @@ SNIPPET = 200
 EXIT_DRAIN = 1.0  # seconds to read what a program wrote before it exited, once its group is killed
 
 
-def _snippet(raw: bytes | str) -> str:
+def snippet(raw: bytes | str) -> str:
     text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else raw
     text = text.rstrip("\r\n")
     return text if len(text) <= SNIPPET else text[:SNIPPET] + "..."
@@ -33,7 +33,7 @@ def _reject_constant(name: str):
     raise ValueError(f"{name} is not JSON")
 
 
-def _parse(raw: bytes):
+def parse_line(raw: bytes):
     """The JSON value of a line (strict: NaN and Infinity are not JSON; nested no deeper than the code that reads
     it follows); raises ValueError."""
     try:
@@ -46,7 +46,7 @@ def _parse(raw: bytes):
     return value
 
 
-class _StderrTail:
+class StderrTail:
     """The last ``STDERR_KEEP`` bytes the program(s) wrote on stderr, fed by reader threads."""
 
     def __init__(self):
@@ -98,7 +98,7 @@ class Channel:
             return None
 
 
-class _Process(Channel):
+class Process(Channel):
     """One run of the program, in a process group of its own: pipes, a thread each for stdin, stdout and
     stderr, one that waits for its exit, and an event queue.
 
@@ -106,7 +106,7 @@ class _Process(Channel):
     ``("eof", b"")``, ``("exit", b"")`` (the program itself ended, whoever still holds its stdout).
     """
 
-    def __init__(self, argv: list[str], cwd, env, max_line: int, tail: _StderrTail, memory_limit: int):
+    def __init__(self, argv: list[str], cwd, env, max_line: int, tail: StderrTail, memory_limit: int):
         self.popen = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                       cwd=cwd, env=env, shell=False, start_new_session=True)
         if memory_limit:  # set from outside: preexec_fn is unsafe while this process runs threads
@@ -186,7 +186,7 @@ class _Process(Channel):
         self.popen.wait()
         self.events.put(("exit", b""))
 
-    def _read_stderr(self, tail: _StderrTail) -> None:
+    def _read_stderr(self, tail: StderrTail) -> None:
         stderr = self.popen.stderr
         try:
             while chunk := stderr.read1(65536):

@@ -54,7 +54,7 @@ from typing import Iterable, Iterator
 
 from ..core.results import Incident
 from ..core.session import AdapterStartError, Answer, Job
-from .channel import EXIT_DRAIN, SNIPPET, _parse, _Process, _snippet, _StderrTail
+from .channel import EXIT_DRAIN, SNIPPET, parse_line, Process, snippet, StderrTail
 
 MAX_RESTARTS = 20
 BATCH = 64  # requests per line for a program that takes batches
@@ -91,7 +91,7 @@ def _answer(op: str, reply: dict) -> Answer:
     if reply.get("unsupported") is True:
         return Answer("unsupported", reason=error or "unsupported")
     if ok is False and reply.get("internal") is True:
-        return Answer("adapter-error", reason=f"adapter failed: {_snippet(error)}")
+        return Answer("adapter-error", reason=f"adapter failed: {snippet(error)}")
     if ok is False:
         if rule is not None and not isinstance(rule, str):
             return _malformed("'rule' is not a string", reply)
@@ -115,7 +115,7 @@ def _answer(op: str, reply: dict) -> Answer:
 
 
 def _malformed(what: str, reply: dict) -> Answer:
-    return Answer("adapter-error", reason=f"malformed answer ({what}): {_snippet(json.dumps(reply))}")
+    return Answer("adapter-error", reason=f"malformed answer ({what}): {snippet(json.dumps(reply))}")
 
 
 class _Restart(Exception):
@@ -143,9 +143,9 @@ class SubprocessSession:
         self.hello_timeout = timeout if hello_timeout is None else hello_timeout  # start-up may take longer
         self.cwd, self.env, self.max_line, self.pipeline = cwd, env, max_line, max(1, pipeline)
         self.batch = batch
-        self._tail = _StderrTail()
+        self._tail = StderrTail()
         self._ids = count(1)
-        self._proc: _Process | None = None
+        self._proc: Process | None = None
         self._info: dict | None = None
         self.incidents: list[Incident] = []
 
@@ -169,7 +169,7 @@ class SubprocessSession:
     def _open(self):
         """A new channel to the program: a new run of it (a socket session opens a connection instead)."""
         try:
-            return _Process(self.argv, self.cwd, self.env, self.max_line, self._tail, self.memory_limit)
+            return Process(self.argv, self.cwd, self.env, self.max_line, self._tail, self.memory_limit)
         except OSError as exc:
             raise AdapterStartError(f"cannot start adapter {self.argv}: {exc.strerror or exc}") from exc
 
@@ -186,7 +186,7 @@ class SubprocessSession:
             raise
         self._proc = proc
 
-    def _greet(self, proc: _Process) -> dict:
+    def _greet(self, proc: Process) -> dict:
         ident = next(self._ids)
         proc.send({"id": ident, "op": "hello"})
         deadline = time.monotonic() + self.hello_timeout
@@ -203,22 +203,22 @@ class SubprocessSession:
         if kind == "eof":
             status = proc.exit_status() or "closed its stdout"
             proc.stop(kill=True)
-            tail = _snippet(self._tail.text(proc.stderr_start)[-SNIPPET:].strip())
+            tail = snippet(self._tail.text(proc.stderr_start)[-SNIPPET:].strip())
             raise AdapterStartError(f"adapter {status} before answering hello" + (f"; stderr: {tail}" if tail else ""))
         if kind == "oversize":
-            raise AdapterStartError(f"adapter answered hello with a line over {self.max_line} bytes: {_snippet(raw)}")
+            raise AdapterStartError(f"adapter answered hello with a line over {self.max_line} bytes: {snippet(raw)}")
         try:
-            reply = _parse(raw)
+            reply = parse_line(raw)
         except ValueError:
             reply = None
         if not isinstance(reply, dict):
-            raise AdapterStartError(f"adapter answered hello with something that is not a JSON object: {_snippet(raw)}")
+            raise AdapterStartError(f"adapter answered hello with something that is not a JSON object: {snippet(raw)}")
         if reply.get("id") != ident:
             raise AdapterStartError(f"adapter answered hello with id {str(reply.get('id'))[:40]!r}, expected {ident}")
         if reply.get("ok") is False:
-            raise AdapterStartError(f"adapter refused hello: {_snippet(str(reply.get('error', '')))}")
+            raise AdapterStartError(f"adapter refused hello: {snippet(str(reply.get('error', '')))}")
         if reply.get("ok") is not True:
-            raise AdapterStartError(f"adapter answered hello without \"ok\": true: {_snippet(raw)}")
+            raise AdapterStartError(f"adapter answered hello without \"ok\": true: {snippet(raw)}")
         return {key: value for key, value in reply.items() if key not in ("id", "ok")}
 
     # ------------------------------------------------------------ running jobs
@@ -288,19 +288,19 @@ class SubprocessSession:
             raise self._unattributed(state, "crash", f"adapter {status}")
         if kind == "oversize":
             raise self._unattributed(state, "adapter-error",
-                                     f"adapter wrote a line over {self.max_line} bytes: {_snippet(raw)}")
+                                     f"adapter wrote a line over {self.max_line} bytes: {snippet(raw)}")
         try:
-            reply = _parse(raw)
+            reply = parse_line(raw)
         except ValueError:
             raise self._unattributed(state, "adapter-error",
-                                     f"adapter wrote a line that is not JSON: {_snippet(raw)}") from None
+                                     f"adapter wrote a line that is not JSON: {snippet(raw)}") from None
         replies = reply if isinstance(reply, list) and reply and self._info.get("batch") is True else [reply]
         for reply in replies:
             ident = reply.get("id") if isinstance(reply, dict) else None
             call = state.inflight.pop(ident, None) if isinstance(ident, int) and not isinstance(ident, bool) else None
             if call is None:
                 what = "not a JSON object" if not isinstance(reply, dict) else "an answer to no request in flight"
-                raise self._unattributed(state, "adapter-error", f"adapter wrote {what}: {_snippet(raw)}")
+                raise self._unattributed(state, "adapter-error", f"adapter wrote {what}: {snippet(raw)}")
             state.answered()
             answer = _answer(call.body["op"], reply)
             answer.note = call.note

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..core.suite import Suite
 from ..inputs import read_bytes
-from ..wording import counted
+from ..core.wording import counted
 from .corpus import ALTERED, MANIFEST, read_document
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 from ...core.cases import expectation
 from ..scenario.kind import LiveKind
 from .phase import Frame, Phase, ProbeProgram
-from ...wording import counted
+from ...core.wording import counted
 
 
 class RobustnessKind(LiveKind):

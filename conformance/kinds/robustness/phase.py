@@ -24,7 +24,7 @@ from ..scenario.wire import Addressing, Composed, Parsed
 from .hostile import Hostile
 from .probing import Probing
 from .script import FLOOD_ENTITY, Frame, Probe, Restart, Send, Wait
-from ...wording import counted
+from ...core.wording import counted
 
 
 @dataclass

@@ -20,7 +20,7 @@ def command(args) -> int:
     from ...errors import UsageError
     from . import load
     from .package_files import write_package
-    from ...wording import counted
+    from ...core.wording import counted
 
     suite = load()
     edition = chosen_edition(suite, args.edition)

@@ -9,7 +9,7 @@ import time
 
 from ....arguments import chosen_edition, listen_port, probability
 from .breaks import BREAKS, VARIANTS
-from ....wording import counted
+from ....core.wording import counted
 
 
 def add_command(sub) -> None:
